@@ -1,0 +1,135 @@
+"""Checking and sanitising the inputs every detector shares.
+
+Shapes and dtypes are checked at trace time and raise ``ValueError`` naming
+the argument. Values are checked only where they are concrete (outside
+``jit``): segment indices in range, a radius that is finite and non-negative.
+Under ``jit`` a bad value cannot raise, so it is neutralised instead: a slave
+with a NaN or inf coordinate is treated as masked, a segment touching such a
+node as masked, and both are replaced by zeros before any arithmetic so that
+nothing NaN reaches a value or a gradient.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxcontact._types import Array, Surface
+
+
+def _is_concrete(value) -> bool:
+    return not isinstance(value, jax.core.Tracer)
+
+
+def _describe(value) -> str:
+    return f"shape {tuple(np.shape(value))} and dtype {jnp.result_type(value)}"
+
+
+def check_points(name: str, points, dtype=None) -> Array:
+    """Checks ``points`` is f[N, 2] (of ``dtype`` if given) and returns it as an array."""
+    if not hasattr(points, "dtype"):
+        points = np.asarray(points)
+    kind = np.dtype(points.dtype).kind
+    if np.ndim(points) != 2 or np.shape(points)[-1] != 2:
+        raise ValueError(f"{name} must have shape (N, 2); got {_describe(points)}")
+    if kind != "f":
+        raise ValueError(
+            f"{name} must be a real floating array (float32 or float64); got {_describe(points)}"
+        )
+    if dtype is not None and points.dtype != dtype:
+        raise ValueError(
+            f"{name} must have the slaves' dtype {np.dtype(dtype)}; got {_describe(points)}"
+        )
+    return jnp.asarray(points)
+
+
+def check_mask(name: str, mask, length: int) -> Array | None:
+    """Checks an optional boolean row mask of length ``length``."""
+    if mask is None:
+        return None
+    if not hasattr(mask, "dtype"):
+        mask = np.asarray(mask)
+    if np.shape(mask) != (length,) or mask.dtype != np.bool_:
+        raise ValueError(f"{name} must have shape ({length},) and dtype bool; got {_describe(mask)}")
+    return jnp.asarray(mask)
+
+
+def check_surface(surface: Surface, dtype) -> Surface:
+    """Checks a ``Surface`` against the slaves' ``dtype``."""
+    if not isinstance(surface, Surface):
+        raise ValueError(f"surface must be a jaxcontact.Surface; got {type(surface).__name__}")
+    nodes = check_points("surface.nodes", surface.nodes, dtype)
+    segments = surface.segments
+    if not hasattr(segments, "dtype"):
+        segments = np.asarray(segments)
+    if np.ndim(segments) != 2 or np.shape(segments)[-1] != 2:
+        raise ValueError(f"surface.segments must have shape (M, 2); got {_describe(segments)}")
+    if np.dtype(segments.dtype).kind not in "iu":
+        raise ValueError(f"surface.segments must be an integer array; got {_describe(segments)}")
+    if _is_concrete(segments) and segments.size:
+        values = np.asarray(segments)
+        low, high = int(values.min()), int(values.max())
+        if low < 0 or high >= nodes.shape[0]:
+            raise ValueError(
+                f"surface.segments must index surface.nodes, in [0, {nodes.shape[0] - 1}]; "
+                f"got values in [{low}, {high}]"
+            )
+    mask = check_mask("surface.mask", surface.mask, segments.shape[0])
+    return Surface(nodes, jnp.asarray(segments, jnp.int32), mask)
+
+
+def check_radius(radius, dtype) -> Array:
+    """Checks ``radius`` is a real scalar, finite and >= 0 where concrete."""
+    if np.ndim(radius) != 0:
+        raise ValueError(f"radius must be a scalar; got shape {tuple(np.shape(radius))}")
+    if np.dtype(jnp.result_type(radius)).kind not in "fiu":
+        raise ValueError(f"radius must be real; got dtype {jnp.result_type(radius)}")
+    if _is_concrete(radius):
+        value = float(np.asarray(radius))
+        if not np.isfinite(value) or value < 0:
+            raise ValueError(f"radius must be finite and >= 0; got {value}")
+    return jnp.asarray(radius, dtype)
+
+
+class Segments(NamedTuple):
+    """Master segments resolved to end points, with bad ones neutralised."""
+
+    start: Array  # f[M, 2]  a; zeros where not ok
+    end: Array  # f[M, 2]  b; zeros where not ok
+    ok: Array  # bool[M]  real, finite and of non-zero length
+
+
+def resolve_segments(surface: Surface) -> Segments:
+    """End points of every segment; masked, non-finite or zero-length ones flagged."""
+    start = surface.nodes[surface.segments[:, 0]]
+    end = surface.nodes[surface.segments[:, 1]]
+    finite = jnp.all(jnp.isfinite(start) & jnp.isfinite(end), axis=-1)
+    ok = finite if surface.mask is None else finite & surface.mask
+    start = jnp.where(ok[:, None], start, 0)
+    end = jnp.where(ok[:, None], end, 0)
+    length_squared = jnp.sum((end - start) ** 2, axis=-1)
+    ok = ok & (length_squared > 0) & jnp.isfinite(length_squared)
+    return Segments(jnp.where(ok[:, None], start, 0), jnp.where(ok[:, None], end, 0), ok)
+
+
+def sanitize_points(points: Array, mask: Array | None) -> tuple[Array, Array]:
+    """Returns ``(points with bad rows zeroed, bool[N] row ok)``."""
+    ok = jnp.all(jnp.isfinite(points), axis=-1)
+    if mask is not None:
+        ok = ok & mask
+    return jnp.where(ok[:, None], points, 0), ok
+
+
+def check_paths(x_prev, x, mask) -> tuple[Array, Array, Array]:
+    """Checks a pair of slave positions; returns both sanitised and bool[N] row ok."""
+    x_prev = check_points("x_prev", x_prev)
+    x = check_points("x", x, x_prev.dtype)
+    if x.shape != x_prev.shape:
+        raise ValueError(f"x must have x_prev's shape {x_prev.shape}; got shape {x.shape}")
+    mask = check_mask("mask", mask, x.shape[0])
+    _, prev_ok = sanitize_points(x_prev, mask)
+    x, ok = sanitize_points(x, prev_ok)
+    return jnp.where(ok[:, None], x_prev, 0), x, ok

@@ -1,0 +1,59 @@
+"""The pytrees that go in and come out of every detector.
+
+All three are ``NamedTuple``s, so they are immutable, registered with JAX as
+pytrees (they pass through ``jit``, ``vmap``, ``grad`` and ``lax.scan``), and
+unpack like tuples. Shapes below use ``N`` for slaves, ``P`` for master nodes
+and ``M`` for master segments; ``f`` is the input's float dtype.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import jax
+
+Array = jax.Array
+
+
+class Surface(NamedTuple):
+    """The master: straight segments between nodes of one or more outlines.
+
+    Segment ``k`` runs from ``nodes[segments[k, 0]]`` to ``nodes[segments[k, 1]]``;
+    its outward normal is the tangent turned clockwise, so an outline listed
+    counter-clockwise has normals pointing out of it.
+    """
+
+    nodes: Array  # f[P, 2]  master node coordinates
+    segments: Array  # i32[M, 2]  start and end node index of each segment
+    mask: Array | None = None  # bool[M]  True for real segments; None means all real
+
+
+class Contact(NamedTuple):
+    """Closest-point contact, one row per slave.
+
+    Rows that are not ``found`` (masked slaves, slaves farther than the radius
+    from every real segment) hold zeros in ``gap``, ``xi``, ``point`` and
+    ``normal`` and ``-1`` in ``segment``; these zeros carry zero gradient.
+    """
+
+    gap: Array  # f[N]  signed gap; negative is penetration
+    xi: Array  # f[N]  projection coordinate on the chosen segment, in [0, 1]
+    segment: Array  # i32[N]  chosen segment, -1 where not found
+    point: Array  # f[N, 2]  closest point on the chosen segment
+    normal: Array  # f[N, 2]  outward unit normal of the chosen segment
+    found: Array  # bool[N]  a real segment lies within the radius
+    active: Array  # bool[N]  found & (gap < 0)
+    overflow: Array  # bool[]  a fixed capacity was too small; a contact may be missing
+
+
+class Crossing(NamedTuple):
+    """First crossing of each slave's path ``x_prev -> x`` with the master.
+
+    Rows that are not ``crossed`` hold ``t = 0``, ``point = 0`` and ``segment = -1``.
+    """
+
+    t: Array  # f[N]  path parameter of the first crossing, in [0, 1]
+    segment: Array  # i32[N]  crossed segment, -1 where none
+    point: Array  # f[N, 2]  where the path meets the segment: x_prev + t (x - x_prev)
+    crossed: Array  # bool[N]  the path meets a real segment
+    overflow: Array  # bool[]  a fixed capacity was too small; a crossing may be missing
