@@ -1,7 +1,12 @@
 """jaxcontact: 2D node-to-segment contact detection as differentiable JAX array programs."""
 
+from jaxcontact._bucket import bucket_sort as bucket_sort
+from jaxcontact._bucket import bucket_swept as bucket_swept
 from jaxcontact._dense import all_to_all as all_to_all
 from jaxcontact._dense import swept as swept
+from jaxcontact._plan import BucketPlan as BucketPlan
+from jaxcontact._plan import plan_buckets as plan_buckets
+from jaxcontact._plan import replan as replan
 from jaxcontact._types import Contact as Contact
 from jaxcontact._types import Crossing as Crossing
 from jaxcontact._types import Surface as Surface

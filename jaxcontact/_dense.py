@@ -1,11 +1,7 @@
 """The exhaustive detectors: every slave against every master segment.
 
-The per-pair kernel is ``vmap``-ed over the slaves for one segment at a time,
-and a running minimum is kept over the segments: O(N) memory whatever M is,
-and one fused pass over the slaves per segment. (An (N, M) plane reduced along
-M, or an ``argmin`` over it, measured 2-10x slower on the CPU; see
-benchmarks/dense.py.) Segments are visited in unrolled blocks inside a
-``lax.scan``, so compile time stays flat for large M. The kernel is then
+The per-pair kernel is ``vmap``-ed over the slaves for one segment at a time
+and reduced by ``lowest_score`` over the segments; the kernel is then
 evaluated once more for each slave's chosen pair.
 """
 
@@ -17,50 +13,8 @@ import jax.numpy as jnp
 from jaxcontact import _inputs
 from jaxcontact._assemble import contact_from_choice, crossing_from_choice
 from jaxcontact._geometry import path_hit, squared_distance
+from jaxcontact._search import lowest_score
 from jaxcontact._types import Array, Contact, Crossing, Surface
-
-# Segments visited per unrolled block; larger blocks compile longer.
-_BLOCK = 32
-
-
-def first_minimum(score, num_segments: int, num_slaves: int, dtype) -> Array:
-    """i32[N]: for each slave, the lowest segment index with the smallest score.
-
-    Args:
-      score: ``score(k) -> f[N]`` for a (traced) segment index ``k``; ``inf``
-        marks an ineligible pair.
-      num_segments: M.
-      num_slaves: N.
-      dtype: the score's dtype.
-
-    Returns:
-      The chosen segment per slave; ``-1`` where every score is ``inf``.
-    """
-    best = jnp.full((num_slaves,), jnp.inf, dtype)
-    choice = jnp.full((num_slaves,), -1, jnp.int32)
-    if num_segments == 0:
-        return choice
-    block = min(num_segments, _BLOCK)
-    num_blocks = -(-num_segments // block)
-
-    def visit_block(carry, first):
-        best, choice = carry
-        for offset in range(block):
-            k = first + offset
-            value = jnp.where(k < num_segments, score(jnp.minimum(k, num_segments - 1)), jnp.inf)
-            # Strictly smaller: of equal scores the earlier (lower) index stays.
-            better = value < best
-            best = jnp.where(better, value, best)
-            choice = jnp.where(better, k, choice)
-        return (best, choice), None
-
-    firsts = jnp.arange(num_blocks, dtype=jnp.int32) * block
-    if num_blocks == 1:
-        (_, choice), _ = visit_block((best, choice), firsts[0])
-    else:
-        (_, choice), _ = jax.lax.scan(visit_block, (best, choice), firsts)
-    return choice
-
 
 def all_to_all(x: Array, surface: Surface, *, radius, mask: Array | None = None) -> Contact:
     """Closest master segment of every slave, by dense N x M projection.
@@ -98,9 +52,10 @@ def all_to_all(x: Array, surface: Surface, *, radius, mask: Array | None = None)
 
     def score(k):
         eligible = slave_ok & segments.ok[k]
-        return jnp.where(eligible, to_segment(x, segments.start[k], segments.end[k]), jnp.inf)
+        value = to_segment(x, segments.start[k], segments.end[k])
+        return jnp.where(eligible, value, jnp.inf), jnp.broadcast_to(k, value.shape)
 
-    choice = first_minimum(score, segments.ok.shape[0], x.shape[0], x.dtype)
+    choice = lowest_score(score, segments.ok.shape[0], x.shape[0], x.dtype, ordered=True)
     return contact_from_choice(x, segments, choice, radius, jnp.zeros((), bool))
 
 
@@ -136,7 +91,7 @@ def swept(x_prev: Array, x: Array, surface: Surface, *, mask: Array | None = Non
     def score(k):
         hit = hit_of(x_prev, x, segments.start[k], segments.end[k])
         eligible = slave_ok & segments.ok[k] & hit.hit
-        return jnp.where(eligible, hit.t, jnp.inf)
+        return jnp.where(eligible, hit.t, jnp.inf), jnp.broadcast_to(k, hit.t.shape)
 
-    choice = first_minimum(score, segments.ok.shape[0], x.shape[0], x.dtype)
+    choice = lowest_score(score, segments.ok.shape[0], x.shape[0], x.dtype, ordered=True)
     return crossing_from_choice(x_prev, x, segments, choice, jnp.zeros((), bool))

@@ -1,0 +1,95 @@
+"""The broad phase: boxes, their overlap, and culling whole blocks of slaves.
+
+This is the paper's preliminary phase (section 2.1): the master's bounding
+box, inflated by the search distance, against the slaves' boxes. Slaves are
+culled a block at a time (``block_size`` consecutive rows), because a box per
+block costs one streaming pass over the slaves, while compacting single
+slaves (``jnp.nonzero`` over N rows) costs more than the whole narrow phase
+near a small tool. Culling pays when rows that are close in the input are
+close in space, as mesh numberings are; a random order is still correct, only
+slower.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import jax.numpy as jnp
+
+from jaxcontact._inputs import Segments
+from jaxcontact._types import Array
+
+
+def conservative_margin(distance: Array, *coordinates: Array) -> Array:
+    """``distance`` widened so that box tests never miss what the kernel finds.
+
+    A box test and the per-pair kernel round differently. Widening by a
+    relative 2^-8 of the distance and 16 ulps of the largest coordinate makes
+    the test strictly more inclusive than the kernel; the cost is a few extra
+    candidates.
+    """
+    dtype = distance.dtype
+    scale = jnp.zeros((), dtype)
+    for values in coordinates:
+        finite = jnp.where(jnp.isfinite(values), jnp.abs(values), 0)
+        scale = jnp.maximum(scale, jnp.max(finite, initial=0))
+    return distance * (1 + 2.0**-8) + 16 * jnp.finfo(dtype).eps * scale
+
+
+class Box(NamedTuple):
+    """An axis-aligned box; empty when any ``low > high``."""
+
+    low: Array  # f[..., 2]
+    high: Array  # f[..., 2]
+
+
+def segment_boxes(segments: Segments, inflate: Array) -> Box:
+    """f[M, 2] boxes of the segments inflated by ``inflate``; masked ones empty."""
+    low = jnp.minimum(segments.start, segments.end) - inflate
+    high = jnp.maximum(segments.start, segments.end) + inflate
+    ok = segments.ok[:, None]
+    return Box(jnp.where(ok, low, jnp.inf), jnp.where(ok, high, -jnp.inf))
+
+
+def enclosing(boxes: Box, axis: int = 0) -> Box:
+    """The box around ``boxes`` along ``axis`` (empty boxes contribute nothing)."""
+    return Box(jnp.min(boxes.low, axis=axis), jnp.max(boxes.high, axis=axis))
+
+
+def overlaps(first: Box, second: Box) -> Array:
+    """bool[...]: the boxes share a point (touching counts)."""
+    return jnp.all((first.low <= second.high) & (first.high >= second.low), axis=-1)
+
+
+class Blocks(NamedTuple):
+    """The slave rows that survive culling, in a buffer of fixed size."""
+
+    rows: Array  # i32[S]  slave row, N for an empty slot (S = capacity * block_size)
+    count: Array  # i32[]  blocks that overlap the master's box
+    overflow: Array  # bool[]  more blocks overlap than the buffer holds
+
+
+def block_boxes(low: Array, high: Array, ok: Array, block_size: int) -> Box:
+    """f[B, 2] boxes of consecutive blocks of rows; rows not ``ok`` are left out."""
+    num_rows = low.shape[0]
+    num_blocks = -(-num_rows // block_size)
+    pad = num_blocks * block_size - num_rows
+    low = jnp.pad(jnp.where(ok[:, None], low, jnp.inf), ((0, pad), (0, 0)), constant_values=jnp.inf)
+    high = jnp.pad(
+        jnp.where(ok[:, None], high, -jnp.inf), ((0, pad), (0, 0)), constant_values=-jnp.inf
+    )
+    return Box(
+        jnp.min(low.reshape(num_blocks, block_size, 2), axis=1),
+        jnp.max(high.reshape(num_blocks, block_size, 2), axis=1),
+    )
+
+
+def cull_blocks(boxes: Box, target: Box, num_rows: int, block_size: int, capacity: int) -> Blocks:
+    """Keeps the blocks whose box meets ``target``, at most ``capacity`` of them."""
+    num_blocks = boxes.low.shape[0]
+    meets = overlaps(boxes, Box(target.low[None], target.high[None]))
+    count = jnp.sum(meets, dtype=jnp.int32)
+    (kept,) = jnp.nonzero(meets, size=capacity, fill_value=num_blocks)
+    rows = kept[:, None] * block_size + jnp.arange(block_size, dtype=kept.dtype)[None, :]
+    rows = jnp.where((kept[:, None] < num_blocks) & (rows < num_rows), rows, num_rows)
+    return Blocks(rows.reshape(-1).astype(jnp.int32), count, count > capacity)

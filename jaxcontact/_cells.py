@@ -1,0 +1,109 @@
+"""Fixed-size cell binning of the master segments.
+
+A uniform grid of ``shape`` cells, each ``cell_size`` wide, starts at
+``origin``. Each segment is registered in every cell that its inflated box
+touches; a query point then looks only at the segments of its own cell. A
+segment within the inflation distance of a point has an inflated box that
+contains the point, and cell indices are a monotone function of the
+coordinate (the same ``floor((p - origin) / cell_size)`` for both), so the
+point's cell is among the box's cells: nothing is lost at cell edges, at
+negative coordinates, or for points exactly on a boundary.
+
+All sizes are static: a segment may span at most ``span`` cells per axis and
+a cell hold at most ``capacity`` segments; beyond either, ``overflow`` is set.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+
+from jaxcontact._broad import Box
+from jaxcontact._types import Array
+
+
+class Grid(NamedTuple):
+    """Where the cells are. ``origin`` and ``cell_size`` are traced."""
+
+    origin: Array  # f[2]  lower-left corner of cell (0, 0)
+    cell_size: Array  # f[]  edge length of every cell
+
+
+class Bins(NamedTuple):
+    """Segments sorted by cell: cell ``c`` holds ``order[start[c] : start[c] + count[c]]``."""
+
+    order: Array  # i32[E]  segment of each sorted entry (E = M * span_x * span_y)
+    start: Array  # i32[G + 1]  first entry of each cell (G = cells; the last is "no cell")
+    count: Array  # i32[G + 1]  entries of each cell
+    overflow: Array  # bool[]  a segment spans too many cells, or a cell holds too many
+
+
+def cell_of(points: Array, grid: Grid, shape: tuple[int, int]) -> Array:
+    """i32[..., 2]: the cell of each point, clamped into the grid."""
+    leading = (1,) * (points.ndim - 1)
+    index = jnp.floor((points - grid.origin.reshape(leading + (2,))) / grid.cell_size)
+    upper = jnp.asarray(shape, index.dtype).reshape(leading + (2,)) - 1
+    return jnp.clip(index, 0, upper).astype(jnp.int32)
+
+
+def flat_cell(cell: Array, shape: tuple[int, int]) -> Array:
+    """i32[...]: row-major number of a cell given as (ix, iy)."""
+    return cell[..., 1] * shape[0] + cell[..., 0]
+
+
+def bin_segments(
+    boxes: Box, ok: Array, grid: Grid, shape: tuple[int, int], span: tuple[int, int], capacity: int
+) -> Bins:
+    """Registers every ``ok`` segment in each cell its box touches.
+
+    Args:
+      boxes: f[M, 2] inflated segment boxes.
+      ok: bool[M] real segments.
+      grid: the grid's placement.
+      shape: static (cells in x, cells in y).
+      span: static most cells a segment may cover per axis.
+      capacity: static most segments a cell may hold.
+    """
+    num_cells = shape[0] * shape[1]
+    num_segments = ok.shape[0]
+    safe = ok[:, None]
+    low = cell_of(jnp.where(safe, boxes.low, grid.origin), grid, shape)
+    high = cell_of(jnp.where(safe, boxes.high, grid.origin), grid, shape)
+    too_wide = jnp.any(ok & jnp.any(high - low >= jnp.asarray(span)[None], axis=-1))
+    step_x = jnp.arange(span[0], dtype=jnp.int32)[None, :, None]
+    step_y = jnp.arange(span[1], dtype=jnp.int32)[None, None, :]
+    cell_x = low[:, 0, None, None] + step_x
+    cell_y = low[:, 1, None, None] + step_y
+    inside = ok[:, None, None] & (cell_x <= high[:, 0, None, None]) & (cell_y <= high[:, 1, None, None])
+    cell = jnp.where(inside, cell_y * shape[0] + cell_x, num_cells).reshape(-1)
+    segment = jnp.broadcast_to(
+        jnp.arange(num_segments, dtype=jnp.int32)[:, None, None], inside.shape
+    ).reshape(-1)
+    count = jax.ops.segment_sum(jnp.ones_like(cell), cell, num_segments=num_cells + 1)
+    # A stable sort keeps each cell's segments in increasing order.
+    order = segment[jnp.argsort(cell, stable=True)]
+    start = jnp.cumsum(count) - count
+    too_full = jnp.max(count[:num_cells], initial=0) > capacity
+    # The last "cell" gathers the unused entries; a point there must see none.
+    count = count.at[num_cells].set(0)
+    return Bins(order, start.astype(jnp.int32), count.astype(jnp.int32), too_wide | too_full)
+
+
+def candidates(cells: Array, bins: Bins, capacity: int) -> Array:
+    """i32[S, capacity]: the segments registered in each point's cell, -1 padded.
+
+    Args:
+      cells: i32[S] flat cell of each query point (the "no cell" number for
+        points that should see nothing).
+      bins: the binned segments.
+      capacity: static slots per cell.
+    """
+    slot = jnp.arange(capacity, dtype=jnp.int32)[None, :]
+    entry = bins.start[cells][:, None] + slot
+    present = slot < bins.count[cells][:, None]
+    last = max(bins.order.shape[0] - 1, 0)
+    if bins.order.shape[0] == 0:
+        return jnp.full(entry.shape, -1, jnp.int32)
+    return jnp.where(present, bins.order[jnp.minimum(entry, last)], -1)

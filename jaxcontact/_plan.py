@@ -1,0 +1,204 @@
+"""Plans: the static sizes of a bucket sort, made on the host from concrete data.
+
+As jax-md separates ``allocate`` (host, sizes from data) from ``update``
+(jitted, fixed sizes), ``plan_buckets`` looks at one configuration and returns
+a hashable ``BucketPlan``; ``bucket_sort`` and ``bucket_swept`` run under
+``jit`` with it as a static argument. Every capacity is the measured need
+times ``slack``, so the plan lasts while the scene changes by less than that;
+past it, ``overflow`` turns True and ``replan`` makes a larger one. A new plan
+means a new compilation.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import jax.numpy as jnp
+import numpy as np
+
+from jaxcontact import _inputs
+from jaxcontact._broad import (
+    block_boxes,
+    conservative_margin,
+    cull_blocks,
+    enclosing,
+    segment_boxes,
+)
+from jaxcontact._cells import Grid, bin_segments
+from jaxcontact._types import Array, Surface
+
+# With this many segments or fewer, each kept slave meets every segment: a
+# running minimum over M broadcast segments beats per-slave candidate gathers
+# (benchmarks/bucket.py measures the crossover).
+DENSE_LIMIT = 48
+
+
+@dataclasses.dataclass(frozen=True)
+class BucketPlan:
+    """Static sizes of a bucket sort. Hashable: pass it to ``jit`` as a static argument.
+
+    Attributes:
+      num_slaves: N, the slave count the plan was made for.
+      block_size: slaves culled together (consecutive rows).
+      block_capacity: most blocks kept near the master.
+      for_paths: made for ``bucket_swept`` (path boxes) rather than ``bucket_sort``.
+      use_cells: bin the segments in cells; False tests each kept slave
+        against every segment.
+      grid_shape: cells in x and in y.
+      cell_size: smallest cell edge; cells grow when the region outgrows the grid.
+      span: most cells a segment's inflated box may cover, in x and in y.
+      cell_capacity: most segments one cell may hold.
+    """
+
+    num_slaves: int
+    block_size: int
+    block_capacity: int
+    for_paths: bool = False
+    use_cells: bool = False
+    grid_shape: tuple[int, int] = (1, 1)
+    cell_size: float = 0.0
+    span: tuple[int, int] = (1, 1)
+    cell_capacity: int = 1
+
+    @property
+    def slave_capacity(self) -> int:
+        """Slaves the narrow phase holds: ``block_capacity * block_size``."""
+        return self.block_capacity * self.block_size
+
+
+def _grow(count: float, slack: float, least: int = 1) -> int:
+    return max(least, int(math.ceil(count * slack)))
+
+
+def plan_buckets(
+    x: Array,
+    surface: Surface,
+    *,
+    radius=None,
+    x_prev: Array | None = None,
+    mask: Array | None = None,
+    slack: float = 1.5,
+    block_size: int = 128,
+    use_cells: bool | None = None,
+    cell_factor: float = 1.0,
+) -> BucketPlan:
+    """Sizes a bucket sort for this configuration, with room to spare.
+
+    Args:
+      x: f[N, 2] concrete slave coordinates.
+      surface: the concrete master.
+      radius: the search radius (for ``bucket_sort``).
+      x_prev: f[N, 2] previous positions; give it (and no radius) to plan
+        ``bucket_swept``.
+      mask: optional bool[N] slave mask.
+      slack: every measured capacity is multiplied by this.
+      block_size: slaves culled together; smaller blocks cull tighter but cost
+        a longer block pass.
+      use_cells: force cell binning on or off; by default on above
+        ``DENSE_LIMIT`` segments.
+      cell_factor: cell edge as a multiple of (twice the search distance plus
+        the median segment extent).
+
+    Returns:
+      A ``BucketPlan``.
+    """
+    if (radius is None) == (x_prev is None):
+        raise ValueError("plan_buckets needs radius= (for bucket_sort) or x_prev= (for bucket_swept)")
+    if slack < 1:
+        raise ValueError(f"slack must be >= 1; got {slack}")
+    x = _inputs.check_points("x", x)
+    mask = _inputs.check_mask("mask", mask, x.shape[0])
+    surface = _inputs.check_surface(surface, x.dtype)
+    num_rows, num_segments = x.shape[0], surface.segments.shape[0]
+    segments = _inputs.resolve_segments(surface)
+    for_paths = x_prev is not None
+    if for_paths:
+        x_prev, x, slave_ok = _inputs.check_paths(x_prev, x, mask)
+        query_low, query_high, query = jnp.minimum(x_prev, x), jnp.maximum(x_prev, x), x_prev
+        travel = jnp.max(jnp.where(slave_ok, jnp.max(jnp.abs(x - x_prev), axis=-1), 0), initial=0)
+        cull_reach = jnp.zeros((), x.dtype)
+    else:
+        radius = _inputs.check_radius(radius, x.dtype)
+        x, slave_ok = _inputs.sanitize_points(x, mask)
+        query_low = query_high = query = x
+        travel = cull_reach = radius
+    block_size = max(1, min(block_size, max(num_rows, 1)))
+    num_blocks = -(-num_rows // block_size)
+    if num_rows == 0 or num_segments == 0:
+        return BucketPlan(num_rows, block_size, 1, for_paths)
+    cull_boxes = segment_boxes(segments, conservative_margin(cull_reach, segments.start, segments.end))
+    blocks = cull_blocks(
+        block_boxes(query_low, query_high, slave_ok, block_size),
+        enclosing(cull_boxes),
+        num_rows,
+        block_size,
+        num_blocks,
+    )
+    block_capacity = min(num_blocks, _grow(int(blocks.count), slack))
+    if use_cells is None:
+        use_cells = num_segments > DENSE_LIMIT
+    if not use_cells:
+        return BucketPlan(num_rows, block_size, block_capacity, for_paths)
+
+    # The cells: sized from what the narrow phase will see.
+    reach = conservative_margin(travel, segments.start, segments.end)
+    boxes = segment_boxes(segments, reach)
+    master = enclosing(boxes)
+    kept = np.asarray(blocks.rows)
+    kept = kept[kept < num_rows]
+    kept = kept[np.asarray(slave_ok)[kept]]
+    points = np.asarray(query)[kept]
+    ok = np.asarray(segments.ok)
+    if points.size == 0 or not ok.any():
+        return BucketPlan(num_rows, block_size, block_capacity, for_paths)
+    low = np.maximum(np.asarray(master.low), points.min(axis=0))
+    high = np.minimum(np.asarray(master.high), points.max(axis=0))
+    extent = np.maximum(high - low, 0.0)
+    lengths = np.abs(np.asarray(segments.end) - np.asarray(segments.start))[ok].max(axis=-1)
+    cell_size = cell_factor * (2 * float(reach) + float(np.median(lengths)))
+    # Keep the grid O(slaves kept): no more cells than 4 per kept slave.
+    most_cells = max(64, 4 * len(points))
+    while np.prod(np.ceil(extent * slack / cell_size) + 1) > most_cells:
+        cell_size *= 1.25
+    grid_shape = tuple(int(v) for v in np.ceil(extent * slack / cell_size).astype(int) + 1)
+    widths = (np.asarray(boxes.high) - np.asarray(boxes.low))[ok]
+    span = tuple(int(math.ceil(w * slack / cell_size)) + 1 for w in widths.max(axis=0))
+    bins = bin_segments(
+        boxes,
+        segments.ok,
+        Grid(jnp.asarray(low, x.dtype), jnp.asarray(cell_size, x.dtype)),
+        grid_shape,
+        span,
+        num_segments,
+    )
+    most_per_cell = int(np.max(np.asarray(bins.count)))
+    return BucketPlan(
+        num_slaves=num_rows,
+        block_size=block_size,
+        block_capacity=block_capacity,
+        for_paths=for_paths,
+        use_cells=True,
+        grid_shape=grid_shape,
+        cell_size=float(cell_size),
+        span=span,
+        cell_capacity=_grow(most_per_cell, slack),
+    )
+
+
+def replan(plan: BucketPlan, x: Array, surface: Surface, **kwargs) -> BucketPlan:
+    """A plan for the current data that is nowhere smaller than ``plan``.
+
+    Call it when a result's ``overflow`` is True, then detect again (the new
+    plan compiles once). Keyword arguments are those of ``plan_buckets``.
+    """
+    fresh = plan_buckets(x, surface, block_size=plan.block_size, use_cells=plan.use_cells, **kwargs)
+    if fresh.for_paths != plan.for_paths or not plan.use_cells:
+        return dataclasses.replace(fresh, block_capacity=max(fresh.block_capacity, plan.block_capacity))
+    return dataclasses.replace(
+        fresh,
+        block_capacity=max(fresh.block_capacity, plan.block_capacity),
+        grid_shape=tuple(map(max, fresh.grid_shape, plan.grid_shape)),
+        span=tuple(map(max, fresh.span, plan.span)),
+        cell_capacity=max(fresh.cell_capacity, plan.cell_capacity),
+    )

@@ -1,0 +1,63 @@
+"""The reduction every detector shares: the lowest score, ties to the lowest index."""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+
+from jaxcontact._types import Array
+
+# Up to _UNROLL steps are unrolled into one fused pass over the rows (fastest:
+# the running minimum stays in registers). More steps run in a ``lax.scan``
+# over unrolled blocks of _BLOCK, which keeps compile time flat (measured: 400
+# segments compile in 1.3 s instead of 4-11 s, and run 20% slower).
+_UNROLL = 32
+_BLOCK = 8
+
+
+def lowest_score(score, num_steps: int, num_rows: int, dtype, *, ordered: bool = False) -> Array:
+    """i32[N]: per row, the segment with the smallest score; ties to the lower segment.
+
+    A running minimum over ``num_steps`` calls of ``score``: O(N) memory and
+    one fused pass over the rows per step (an (N, M) plane reduced along M, or
+    an ``argmin``, measured 2-10x slower on the CPU). Steps run in unrolled
+    blocks inside a ``lax.scan``, so compile time stays flat as steps grow.
+
+    Args:
+      score: ``score(step) -> (value f[N], segment i32[N])`` for a traced
+        step index; ``value = inf`` marks no candidate.
+      num_steps: how many steps to visit.
+      num_rows: N.
+      dtype: the values' dtype.
+      ordered: each row meets its segments in increasing order, so a strict
+        ``<`` keeps the lower of equal values and the index test is skipped.
+
+    Returns:
+      The winning segment per row, ``-1`` where every value is ``inf``.
+    """
+    best = jnp.full((num_rows,), jnp.inf, dtype)
+    choice = jnp.full((num_rows,), -1, jnp.int32)
+    if num_steps == 0 or num_rows == 0:
+        return choice
+    block = num_steps if num_steps <= _UNROLL else _BLOCK
+    num_blocks = -(-num_steps // block)
+
+    def visit_block(carry, first):
+        best, choice = carry
+        for offset in range(block):
+            step = first + offset
+            value, segment = score(jnp.minimum(step, num_steps - 1))
+            value = jnp.where(step < num_steps, value, jnp.inf)
+            better = value < best
+            if not ordered:
+                better = better | ((value == best) & (segment < choice) & (value < jnp.inf))
+            best = jnp.where(better, value, best)
+            choice = jnp.where(better, segment, choice)
+        return (best, choice), None
+
+    firsts = jnp.arange(num_blocks, dtype=jnp.int32) * block
+    if num_blocks == 1:
+        (_, choice), _ = visit_block((best, choice), firsts[0])
+    else:
+        (_, choice), _ = jax.lax.scan(visit_block, (best, choice), firsts)
+    return choice
