@@ -1,7 +1,10 @@
 """jaxcontact: 2D node-to-segment contact detection as differentiable JAX array programs."""
 
+from jaxcontact._bucket import Candidates as Candidates
 from jaxcontact._bucket import bucket_sort as bucket_sort
 from jaxcontact._bucket import bucket_swept as bucket_swept
+from jaxcontact._bucket import candidates_expired as candidates_expired
+from jaxcontact._bucket import find_candidates as find_candidates
 from jaxcontact._dense import all_to_all as all_to_all
 from jaxcontact._dense import swept as swept
 from jaxcontact._plan import BucketPlan as BucketPlan

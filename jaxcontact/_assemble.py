@@ -18,19 +18,20 @@ from jaxcontact._types import Array, Contact, Crossing
 
 
 def contact_from_choice(
-    x: Array, segments: Segments, choice: Array, radius: Array, overflow: Array
+    x: Array, segments: Segments, choice: Array, radius: Array, overflow: Array, row_ok: Array
 ) -> Contact:
     """Builds the ``Contact`` of slaves ``x`` (f[N, 2], bad rows zeroed).
 
     Args:
       x: f[N, 2] sanitised slaves.
       segments: the resolved master segments.
-      choice: i32[N] chosen segment per slave, -1 for none (masked slave or no
-        real segment).
+      choice: i32[N] chosen segment per slave, -1 for none.
       radius: f[] search radius.
       overflow: bool[] passed through.
+      row_ok: bool[N] real rows; the others are reported not found.
     """
-    has_choice = choice >= 0
+    choice = jax.lax.stop_gradient(choice)
+    has_choice = row_ok & (choice >= 0)
     index = jnp.maximum(choice, 0)
     if segments.ok.shape[0] == 0:
         start = end = jnp.zeros_like(x)
@@ -56,10 +57,14 @@ def contact_from_choice(
 
 
 def crossing_from_choice(
-    x_prev: Array, x: Array, segments: Segments, choice: Array, overflow: Array
+    x_prev: Array, x: Array, segments: Segments, choice: Array, overflow: Array, row_ok: Array
 ) -> Crossing:
-    """Builds the ``Crossing`` of paths ``x_prev -> x`` (f[N, 2] each, bad rows zeroed)."""
-    has_choice = choice >= 0
+    """Builds the ``Crossing`` of paths ``x_prev -> x`` (f[N, 2] each, bad rows zeroed).
+
+    Arguments as for ``contact_from_choice``.
+    """
+    choice = jax.lax.stop_gradient(choice)
+    has_choice = row_ok & (choice >= 0)
     index = jnp.maximum(choice, 0)
     if segments.ok.shape[0] == 0:
         start = end = jnp.zeros_like(x)

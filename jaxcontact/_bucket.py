@@ -18,12 +18,15 @@ Whenever ``overflow`` is false the result equals ``all_to_all``'s (``swept``'s).
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import jax
 import jax.numpy as jnp
 
 from jaxcontact import _inputs
 from jaxcontact._assemble import contact_from_choice, crossing_from_choice
 from jaxcontact._broad import (
+    Blocks,
     Box,
     block_boxes,
     conservative_margin,
@@ -53,37 +56,53 @@ def _empty_crossing(x: Array, overflow: Array) -> Crossing:
     )
 
 
-def _scatter_rows(result, rows: Array, empty):
-    """Writes the kept rows' results into the all-zero result ``empty``."""
-    return jax.tree.map(
-        lambda full, part: full if full.ndim == 0 else full.at[rows].set(part, mode="drop", unique_indices=True),
-        empty,
-        result,
-    )
+def _scatter_blocks(result, blocks: Blocks, empty, block_size: int):
+    """Writes the kept blocks' results into the all-zero result ``empty``.
+
+    Whole blocks are written (a scatter of C slices of ``block_size`` rows):
+    measured 8x cheaper than a scatter of single rows, which XLA also fused
+    with the projection and recomputed per field.
+    """
+    num_rows = empty.segment.shape[0]
+    num_blocks = -(-num_rows // block_size)
+    pad = num_blocks * block_size - num_rows
+
+    def put(full, part):
+        if full.ndim == 0:
+            return part
+        tail = full.shape[1:]
+        padded = jnp.pad(full, ((0, pad),) + ((0, 0),) * len(tail))
+        by_block = padded.reshape((num_blocks, block_size) + tail)
+        by_block = by_block.at[blocks.index].set(
+            part.reshape((-1, block_size) + tail), mode="drop", unique_indices=True
+        )
+        return by_block.reshape((num_blocks * block_size,) + tail)[:num_rows]
+
+    return jax.tree.map(put, empty, result)
 
 
-def _choose(query: Array, ok: Array, segments: Segments, boxes: Box, pair_value, plan: BucketPlan):
-    """i32[S] chosen segment of each kept slave, and whether the cells overflowed.
+def _search_all(pair_value, segments: Segments, num_rows: int, dtype) -> Array:
+    """i32[S]: each kept slave against every segment (for few segments)."""
+
+    def score(k):
+        value = pair_value(segments.start[k], segments.end[k])
+        return jnp.where(segments.ok[k], value, jnp.inf), jnp.broadcast_to(k, value.shape)
+
+    # Rows are not masked here but where the result is assembled: any per-row
+    # mask fused into this loop made it 3-4x slower (measured).
+    return lowest_score(score, segments.ok.shape[0], num_rows, dtype, ordered=True)
+
+
+def _list_candidates(query: Array, ok: Array, segments: Segments, boxes: Box, plan: BucketPlan):
+    """i32[S, C] the segments in each kept slave's cell (-1 padded), and the cells' overflow.
 
     Args:
       query: f[S, 2] the point whose cell decides the candidates.
       ok: bool[S] kept slave is real.
       segments: resolved segments.
       boxes: f[M, 2] segment boxes inflated by the search distance.
-      pair_value: ``pair_value(rows, start, end) -> f[S]`` (inf where no hit),
-        ``start``/``end`` either f[2] for all rows or f[S, 2] per row.
       plan: the static sizes.
     """
-    num_rows, num_segments = query.shape[0], segments.ok.shape[0]
-    if not plan.use_cells:
-
-        def dense_score(k):
-            value = pair_value(segments.start[k], segments.end[k])
-            return jnp.where(ok & segments.ok[k], value, jnp.inf), jnp.broadcast_to(k, value.shape)
-
-        choice = lowest_score(dense_score, num_segments, num_rows, query.dtype, ordered=True)
-        return choice, jnp.zeros((), bool)
-
     shape = plan.grid_shape
     master = enclosing(boxes)
     low = jnp.maximum(master.low, jnp.min(jnp.where(ok[:, None], query, jnp.inf), axis=0))
@@ -96,17 +115,34 @@ def _choose(query: Array, ok: Array, segments: Segments, boxes: Box, pair_value,
     bins = bin_segments(boxes, segments.ok, grid, shape, plan.span, plan.cell_capacity)
     no_cell = shape[0] * shape[1]
     cells = jnp.where(ok, flat_cell(cell_of(query, grid, shape), shape), no_cell)
-    listed = candidates(cells, bins, plan.cell_capacity)
+    return candidates(cells, bins, plan.cell_capacity), bins.overflow
 
-    def cell_score(slot):
+
+def _search_listed(pair_value, segments: Segments, listed: Array, dtype) -> Array:
+    """i32[S]: each kept slave against its listed segments (i32[S, C], -1 padded)."""
+
+    def score(slot):
         segment = listed[:, slot]
         index = jnp.maximum(segment, 0)
         value = pair_value(segments.start[index], segments.end[index])
         return jnp.where(segment >= 0, value, jnp.inf), segment
 
     # Each cell lists its segments in increasing order.
-    choice = lowest_score(cell_score, plan.cell_capacity, num_rows, query.dtype, ordered=True)
-    return choice, bins.overflow
+    return lowest_score(score, listed.shape[1], listed.shape[0], dtype, ordered=True)
+
+
+def _narrow(query: Array, ok: Array, segments: Segments, boxes: Box, pair_value, plan, listed=None):
+    """i32[S] chosen segment of each kept slave, and whether the cells overflowed.
+
+    Rows that are not ``ok`` may hold any choice; the caller masks them.
+    ``listed`` reuses candidate lists found before (see ``find_candidates``).
+    """
+    if not plan.use_cells:
+        return _search_all(pair_value, segments, query.shape[0], query.dtype), jnp.zeros((), bool)
+    overflow = jnp.zeros((), bool)
+    if listed is None:
+        listed, overflow = _list_candidates(query, ok, segments, boxes, plan)
+    return _search_listed(pair_value, segments, listed, query.dtype), overflow
 
 
 def _vmapped(kernel, *rows):
@@ -129,29 +165,69 @@ def _check_plan(plan, num_slaves: int, for_paths: bool):
         raise ValueError(f"plan was made for the other detector; make one with {wanted}")
 
 
-def _contact_impl(x, surface, radius, mask, plan):
+class Candidates(NamedTuple):
+    """Slaves and segments near each other, found once and reused over steps.
+
+    Found with the search radius widened by a ``skin``; valid while the
+    slaves and the master nodes together have moved less than the skin since
+    (``candidates_expired`` says when not), as the paper recomputes ``d_max``
+    only every n-th step.
+    """
+
+    blocks: Blocks  # the kept blocks of slaves
+    listed: Array | None  # i32[S, C]  each kept slave's segments (cell plans), else None
+    reference: Array  # f[N, 2]  slave positions when found
+    nodes: Array  # f[P, 2]  master node positions when found
+    skin: Array  # f[]  the extra reach
+    overflow: Array  # bool[]  the plan was too small when they were found
+
+
+def _kept_rows(x: Array, slave_ok: Array, blocks: Blocks):
+    rows = jnp.minimum(blocks.rows, x.shape[0] - 1)
+    return x[rows], slave_ok[rows] & (blocks.rows < x.shape[0])
+
+
+def _broad_phase(x, slave_ok, segments, reach, plan):
+    boxes = segment_boxes(segments, conservative_margin(reach, segments.start, segments.end))
+    block = block_boxes(x, x, slave_ok, plan.block_size)
+    blocks = cull_blocks(block, enclosing(boxes), x.shape[0], plan.block_size, plan.block_capacity)
+    return boxes, blocks
+
+
+def _candidates_impl(x, surface, radius, skin, mask, plan):
+    x, slave_ok = _inputs.sanitize_points(x, mask)
+    segments = _inputs.resolve_segments(surface)
+    boxes, blocks = _broad_phase(x, slave_ok, segments, radius + skin, plan)
+    listed, overflow = None, blocks.overflow
+    if plan.use_cells:
+        kept, ok = _kept_rows(x, slave_ok, blocks)
+        listed, cells_overflow = _list_candidates(kept, ok, segments, boxes, plan)
+        overflow = overflow | cells_overflow
+    return Candidates(blocks, listed, x, surface.nodes, skin, overflow)
+
+
+def _contact_impl(x, surface, radius, mask, plan, found=None):
     x, slave_ok = _inputs.sanitize_points(x, mask)
     segments = _inputs.resolve_segments(surface)
     num_rows = x.shape[0]
     no_overflow = jnp.zeros((), bool)
     if num_rows == 0 or segments.ok.shape[0] == 0:
         return _empty_contact(x, no_overflow)
-    reach = conservative_margin(radius, segments.start, segments.end)
-    boxes = segment_boxes(segments, reach)
-    blocks = cull_blocks(
-        block_boxes(x, x, slave_ok, plan.block_size), enclosing(boxes), num_rows, plan.block_size,
-        plan.block_capacity,
-    )
+    if found is None:
+        boxes, blocks = _broad_phase(x, slave_ok, segments, radius, plan)
+        listed, overflow = None, blocks.overflow
+    else:
+        boxes, blocks, listed, overflow = None, found.blocks, found.listed, found.overflow
 
     def narrow(_):
-        rows = jnp.minimum(blocks.rows, num_rows - 1)
-        kept, ok = x[rows], slave_ok[rows] & (blocks.rows < num_rows)
-        choice, overflow = _choose(kept, ok, segments, boxes, _vmapped(squared_distance, kept), plan)
-        part = contact_from_choice(kept, segments, jax.lax.stop_gradient(choice), radius, overflow)
-        return _scatter_rows(part, blocks.rows, _empty_contact(x, overflow))
+        kept, ok = _kept_rows(x, slave_ok, blocks)
+        pair_value = _vmapped(squared_distance, kept)
+        choice, cells_overflow = _narrow(kept, ok, segments, boxes, pair_value, plan, listed)
+        part = contact_from_choice(kept, segments, choice, radius, cells_overflow, ok)
+        return _scatter_blocks(part, blocks, _empty_contact(x, cells_overflow), plan.block_size)
 
     result = jax.lax.cond(blocks.count > 0, narrow, lambda _: _empty_contact(x, no_overflow), None)
-    return result._replace(overflow=result.overflow | blocks.overflow)
+    return result._replace(overflow=result.overflow | overflow)
 
 
 def _crossing_impl(x_prev, x, surface, mask, plan):
@@ -170,9 +246,8 @@ def _crossing_impl(x_prev, x, surface, mask, plan):
     )
 
     def narrow(_):
-        rows = jnp.minimum(blocks.rows, num_rows - 1)
-        start, end = x_prev[rows], x[rows]
-        ok = slave_ok[rows] & (blocks.rows < num_rows)
+        start, ok = _kept_rows(x_prev, slave_ok, blocks)
+        end = x[jnp.minimum(blocks.rows, num_rows - 1)]
         # Where a path meets a segment, its start lies within the path's length
         # of that segment: bin the segments inflated by the longest kept path
         # and look up each path's start (the paper's boxes inflated by d_max).
@@ -183,15 +258,16 @@ def _crossing_impl(x_prev, x, surface, mask, plan):
             hit = path_hit(x_prev, x, a, b)
             return jnp.where(hit.hit, hit.t, jnp.inf)
 
-        choice, overflow = _choose(start, ok, segments, boxes, _vmapped(hit_time, start, end), plan)
-        part = crossing_from_choice(start, end, segments, jax.lax.stop_gradient(choice), overflow)
-        return _scatter_rows(part, blocks.rows, _empty_crossing(x, overflow))
+        choice, overflow = _narrow(start, ok, segments, boxes, _vmapped(hit_time, start, end), plan)
+        part = crossing_from_choice(start, end, segments, choice, overflow, ok)
+        return _scatter_blocks(part, blocks, _empty_crossing(x, overflow), plan.block_size)
 
     result = jax.lax.cond(blocks.count > 0, narrow, lambda _: _empty_crossing(x, no_overflow), None)
     return result._replace(overflow=result.overflow | blocks.overflow)
 
 
 _contact_jit = jax.jit(_contact_impl, static_argnames="plan")
+_candidates_jit = jax.jit(_candidates_impl, static_argnames="plan")
 _crossing_jit = jax.jit(_crossing_impl, static_argnames="plan")
 
 
@@ -200,7 +276,13 @@ def _is_traced(*values) -> bool:
 
 
 def bucket_sort(
-    x: Array, surface: Surface, *, radius, mask: Array | None = None, plan: BucketPlan | None = None
+    x: Array,
+    surface: Surface,
+    *,
+    radius,
+    mask: Array | None = None,
+    plan: BucketPlan | None = None,
+    candidates: Candidates | None = None,
 ) -> Contact:
     """Closest master segment of every slave near the master, by bucket sort.
 
@@ -213,6 +295,9 @@ def bucket_sort(
       plan: static sizes from ``plan_buckets``. Required under ``jit`` (pass it
         as a static argument); a plain call without one plans for itself. A
         new plan compiles anew.
+      candidates: optional ``Candidates`` from ``find_candidates`` with the
+        same plan and mask; the broad phase and the binning are then skipped.
+        The caller keeps them fresh with ``candidates_expired``.
 
     Returns:
       A ``Contact`` equal to ``all_to_all``'s whenever ``overflow`` is False.
@@ -228,7 +313,7 @@ def bucket_sort(
       >>> detect = jax.jit(bucket_sort, static_argnames="plan")
       >>> contact = detect(scene.x, scene.surface, radius=scene.radius, plan=plan)
       >>> bool(contact.overflow), int(contact.found.sum())
-      (False, 12)
+      (False, 13)
       >>> bool((contact.segment == all_to_all(scene.x, scene.surface, radius=0.1).segment).all())
       True
     """
@@ -244,7 +329,56 @@ def bucket_sort(
             )
         plan = plan_buckets(x, surface, radius=radius, mask=mask)
     _check_plan(plan, x.shape[0], for_paths=False)
-    return _contact_jit(x, surface, radius, mask, plan=plan)
+    return _contact_jit(x, surface, radius, mask, plan=plan, found=candidates)
+
+
+def find_candidates(
+    x: Array, surface: Surface, *, radius, skin, plan: BucketPlan, mask: Array | None = None
+) -> Candidates:
+    """Finds the slaves and segments within ``radius + skin`` of each other, for reuse.
+
+    Make the plan for the widened reach, ``plan_buckets(x, surface, radius=radius + skin)``.
+    Pass the result to ``bucket_sort(..., candidates=...)`` on later steps while
+    ``candidates_expired`` is False; a result of such a call equals the
+    plain call's.
+
+    Example:
+      >>> import jax
+      >>> from jaxcontact import bucket_sort, candidates_expired, find_candidates, plan_buckets
+      >>> from jaxcontact.scenes import cutting_scene
+      >>> scene = cutting_scene(2_000, 18.0)
+      >>> plan = plan_buckets(scene.x, scene.surface, radius=0.1 + 0.05)
+      >>> near = find_candidates(scene.x, scene.surface, radius=0.1, skin=0.05, plan=plan)
+      >>> moved = scene.x.at[:, 0].add(0.01)
+      >>> bool(candidates_expired(near, moved, scene.surface))
+      False
+      >>> int(bucket_sort(moved, scene.surface, radius=0.1, plan=plan, candidates=near).found.sum())
+      13
+    """
+    x = _inputs.check_points("x", x)
+    mask = _inputs.check_mask("mask", mask, x.shape[0])
+    surface = _inputs.check_surface(surface, x.dtype)
+    radius = _inputs.check_radius(radius, x.dtype)
+    skin = _inputs.check_radius(skin, x.dtype)
+    _check_plan(plan, x.shape[0], for_paths=False)
+    return _candidates_jit(x, surface, radius, skin, mask, plan=plan)
+
+
+@jax.jit
+def candidates_expired(candidates: Candidates, x: Array, surface: Surface) -> Array:
+    """bool[]: the slaves and the master have moved too far for ``candidates`` to hold.
+
+    A pair within the radius now was within ``radius + skin`` when the
+    candidates were found if the largest slave move plus the largest master
+    node move is at most the skin (a segment moves no farther than its ends).
+    """
+
+    def largest_move(now, then):
+        step = jnp.sum((now - then) ** 2, axis=-1)
+        return jnp.sqrt(jnp.max(jnp.where(jnp.isfinite(step), step, 0), initial=0))
+
+    moved = largest_move(x, candidates.reference) + largest_move(surface.nodes, candidates.nodes)
+    return moved > candidates.skin
 
 
 def bucket_swept(

@@ -16,6 +16,8 @@ from jaxcontact import (
     all_to_all,
     bucket_sort,
     bucket_swept,
+    candidates_expired,
+    find_candidates,
     plan_buckets,
     replan,
     swept,
@@ -313,3 +315,36 @@ def test_plan_fields():
     assert isinstance(plan, BucketPlan)
     assert plan.slave_capacity == plan.block_capacity * plan.block_size
     assert plan.grid_shape[0] > 1 and plan.cell_capacity >= 1
+
+
+@pytest.mark.parametrize("name", ["cutting", "rough_die"])
+def test_candidates_reused_over_steps_equal_a_fresh_search_until_expired(name):
+    """The tool advances step by step; candidates found once serve while within the skin."""
+    radius, skin = (0.1, 0.05) if name == "cutting" else (0.02, 0.01)
+    if name == "cutting":
+        scene = cutting_scene(3_000, 18.0, dtype=jnp.float64)
+    else:
+        scene = rough_die_scene(4_000, 400, dtype=jnp.float64)
+    plan = plan_buckets(scene.x, scene.surface, radius=radius + skin, slack=2.0)
+    near = find_candidates(scene.x, scene.surface, radius=radius, skin=skin, plan=plan)
+    step = jnp.asarray([-0.4 * skin, 0.0])
+    for count in range(1, 4):
+        surface = scene.surface._replace(nodes=scene.surface.nodes + count * step[None])
+        expired = bool(candidates_expired(near, scene.x, surface))
+        assert expired == (count * 0.4 * skin > skin)
+        if expired:
+            break
+        reused = jit_bucket_sort(scene.x, surface, radius=radius, plan=plan, candidates=near)
+        assert_same_contact(reused, all_to_all(scene.x, surface, radius=radius), radius)
+    assert expired, "the test should have run the candidates out"
+
+
+def test_expired_candidates_can_miss_contacts_which_is_why_the_check_exists():
+    scene = cutting_scene(3_000, 20.3)
+    plan = plan_buckets(scene.x, scene.surface, radius=0.15, slack=2.0)
+    near = find_candidates(scene.x, scene.surface, radius=0.1, skin=0.05, plan=plan)
+    moved = scene.surface._replace(nodes=scene.surface.nodes.at[:, 0].add(-1.5))
+    assert bool(candidates_expired(near, scene.x, moved))
+    stale = bucket_sort(scene.x, moved, radius=0.1, plan=plan, candidates=near)
+    fresh = all_to_all(scene.x, moved, radius=0.1)
+    assert int(fresh.found.sum()) > int(stale.found.sum())
