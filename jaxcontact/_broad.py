@@ -81,7 +81,9 @@ def _per_block(values: Array, reduce, block_size: int) -> Array:
     parts = []
     if full:
         flat = values[: full * block_size].reshape(full, 2 * block_size)
-        parts.append(jnp.stack([reduce(flat[:, 0::2], axis=1), reduce(flat[:, 1::2], axis=1)], axis=-1))
+        parts.append(
+            jnp.stack([reduce(flat[:, 0::2], axis=1), reduce(flat[:, 1::2], axis=1)], axis=-1)
+        )
     if num_rows % block_size:
         parts.append(reduce(values[full * block_size :], axis=0, keepdims=True))
     return jnp.concatenate(parts) if len(parts) > 1 else parts[0]
@@ -102,4 +104,6 @@ def cull_blocks(boxes: Box, target: Box, num_rows: int, block_size: int, capacit
     (kept,) = jnp.nonzero(meets, size=capacity, fill_value=num_blocks)
     rows = kept[:, None] * block_size + jnp.arange(block_size, dtype=kept.dtype)[None, :]
     rows = jnp.where((kept[:, None] < num_blocks) & (rows < num_rows), rows, num_rows)
-    return Blocks(kept.astype(jnp.int32), rows.reshape(-1).astype(jnp.int32), count, count > capacity)
+    return Blocks(
+        kept.astype(jnp.int32), rows.reshape(-1).astype(jnp.int32), count, count > capacity
+    )

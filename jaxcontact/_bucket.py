@@ -27,132 +27,25 @@ from jaxcontact import _inputs
 from jaxcontact._assemble import contact_from_choice, crossing_from_choice
 from jaxcontact._broad import (
     Blocks,
-    Box,
     block_boxes,
     conservative_margin,
     cull_blocks,
     enclosing,
     segment_boxes,
 )
-from jaxcontact._cells import Grid, bin_segments, candidates, cell_of, flat_cell
 from jaxcontact._geometry import path_hit, squared_distance
-from jaxcontact._inputs import Segments
+from jaxcontact._narrow import (
+    broad_phase,
+    choose,
+    empty_contact,
+    empty_crossing,
+    kept_rows,
+    list_candidates,
+    scatter_blocks,
+    vmapped,
+)
 from jaxcontact._plan import BucketPlan, plan_buckets
-from jaxcontact._search import lowest_score
 from jaxcontact._types import Array, Contact, Crossing, Surface
-
-
-def _empty_contact(x: Array, overflow: Array) -> Contact:
-    zeros = jnp.zeros(x.shape[:1], x.dtype)
-    false = jnp.zeros(x.shape[:1], bool)
-    minus_one = jnp.full(x.shape[:1], -1, jnp.int32)
-    return Contact(zeros, zeros, minus_one, jnp.zeros_like(x), jnp.zeros_like(x), false, false, overflow)
-
-
-def _empty_crossing(x: Array, overflow: Array) -> Crossing:
-    zeros = jnp.zeros(x.shape[:1], x.dtype)
-    return Crossing(
-        zeros, jnp.full(x.shape[:1], -1, jnp.int32), jnp.zeros_like(x), jnp.zeros(x.shape[:1], bool), overflow
-    )
-
-
-def _scatter_blocks(result, blocks: Blocks, empty, block_size: int):
-    """Writes the kept blocks' results into the all-zero result ``empty``.
-
-    Whole blocks are written (a scatter of C slices of ``block_size`` rows):
-    measured 8x cheaper than a scatter of single rows, which XLA also fused
-    with the projection and recomputed per field.
-    """
-    num_rows = empty.segment.shape[0]
-    num_blocks = -(-num_rows // block_size)
-    pad = num_blocks * block_size - num_rows
-
-    def put(full, part):
-        if full.ndim == 0:
-            return part
-        tail = full.shape[1:]
-        padded = jnp.pad(full, ((0, pad),) + ((0, 0),) * len(tail))
-        by_block = padded.reshape((num_blocks, block_size) + tail)
-        by_block = by_block.at[blocks.index].set(
-            part.reshape((-1, block_size) + tail), mode="drop", unique_indices=True
-        )
-        return by_block.reshape((num_blocks * block_size,) + tail)[:num_rows]
-
-    return jax.tree.map(put, empty, result)
-
-
-def _search_all(pair_value, segments: Segments, num_rows: int, dtype) -> Array:
-    """i32[S]: each kept slave against every segment (for few segments)."""
-
-    def score(k):
-        value = pair_value(segments.start[k], segments.end[k])
-        return jnp.where(segments.ok[k], value, jnp.inf), jnp.broadcast_to(k, value.shape)
-
-    # Rows are not masked here but where the result is assembled: any per-row
-    # mask fused into this loop made it 3-4x slower (measured).
-    return lowest_score(score, segments.ok.shape[0], num_rows, dtype, ordered=True)
-
-
-def _list_candidates(query: Array, ok: Array, segments: Segments, boxes: Box, plan: BucketPlan):
-    """i32[S, C] the segments in each kept slave's cell (-1 padded), and the cells' overflow.
-
-    Args:
-      query: f[S, 2] the point whose cell decides the candidates.
-      ok: bool[S] kept slave is real.
-      segments: resolved segments.
-      boxes: f[M, 2] segment boxes inflated by the search distance.
-      plan: the static sizes.
-    """
-    shape = plan.grid_shape
-    master = enclosing(boxes)
-    low = jnp.maximum(master.low, jnp.min(jnp.where(ok[:, None], query, jnp.inf), axis=0))
-    high = jnp.minimum(master.high, jnp.max(jnp.where(ok[:, None], query, -jnp.inf), axis=0))
-    extent = jnp.where(jnp.isfinite(high - low) & (high > low), high - low, 0)
-    origin = jnp.where(jnp.isfinite(low), low, 0)
-    # The grid always covers the region: cells grow when the region does.
-    cell_size = jnp.maximum(plan.cell_size, jnp.max(extent / jnp.asarray(shape, query.dtype)))
-    grid = Grid(origin, cell_size.astype(query.dtype))
-    bins = bin_segments(boxes, segments.ok, grid, shape, plan.span, plan.cell_capacity)
-    no_cell = shape[0] * shape[1]
-    cells = jnp.where(ok, flat_cell(cell_of(query, grid, shape), shape), no_cell)
-    return candidates(cells, bins, plan.cell_capacity), bins.overflow
-
-
-def _search_listed(pair_value, segments: Segments, listed: Array, dtype) -> Array:
-    """i32[S]: each kept slave against its listed segments (i32[S, C], -1 padded)."""
-
-    def score(slot):
-        segment = listed[:, slot]
-        index = jnp.maximum(segment, 0)
-        value = pair_value(segments.start[index], segments.end[index])
-        return jnp.where(segment >= 0, value, jnp.inf), segment
-
-    # Each cell lists its segments in increasing order.
-    return lowest_score(score, listed.shape[1], listed.shape[0], dtype, ordered=True)
-
-
-def _narrow(query: Array, ok: Array, segments: Segments, boxes: Box, pair_value, plan, listed=None):
-    """i32[S] chosen segment of each kept slave, and whether the cells overflowed.
-
-    Rows that are not ``ok`` may hold any choice; the caller masks them.
-    ``listed`` reuses candidate lists found before (see ``find_candidates``).
-    """
-    if not plan.use_cells:
-        return _search_all(pair_value, segments, query.shape[0], query.dtype), jnp.zeros((), bool)
-    overflow = jnp.zeros((), bool)
-    if listed is None:
-        listed, overflow = _list_candidates(query, ok, segments, boxes, plan)
-    return _search_listed(pair_value, segments, listed, query.dtype), overflow
-
-
-def _vmapped(kernel, *rows):
-    """``pair_value(start, end)`` mapping ``kernel(*row, start, end)`` over rows."""
-
-    def pair_value(start, end):
-        axis = None if start.ndim == 1 else 0
-        return jax.vmap(kernel, in_axes=(0,) * len(rows) + (axis, axis))(*rows, start, end)
-
-    return pair_value
 
 
 def _check_plan(plan, num_slaves: int, for_paths: bool):
@@ -161,7 +54,11 @@ def _check_plan(plan, num_slaves: int, for_paths: bool):
     if plan.num_slaves != num_slaves:
         raise ValueError(f"plan was made for {plan.num_slaves} slaves; x has {num_slaves} rows")
     if plan.for_paths != for_paths:
-        wanted = "plan_buckets(x, surface, x_prev=...)" if for_paths else "plan_buckets(x, surface, radius=...)"
+        wanted = (
+            "plan_buckets(x, surface, x_prev=...)"
+            if for_paths
+            else "plan_buckets(x, surface, radius=...)"
+        )
         raise ValueError(f"plan was made for the other detector; make one with {wanted}")
 
 
@@ -182,26 +79,14 @@ class Candidates(NamedTuple):
     overflow: Array  # bool[]  the plan was too small when they were found
 
 
-def _kept_rows(x: Array, slave_ok: Array, blocks: Blocks):
-    rows = jnp.minimum(blocks.rows, x.shape[0] - 1)
-    return x[rows], slave_ok[rows] & (blocks.rows < x.shape[0])
-
-
-def _broad_phase(x, slave_ok, segments, reach, plan):
-    boxes = segment_boxes(segments, conservative_margin(reach, segments.start, segments.end))
-    block = block_boxes(x, x, slave_ok, plan.block_size)
-    blocks = cull_blocks(block, enclosing(boxes), x.shape[0], plan.block_size, plan.block_capacity)
-    return boxes, blocks
-
-
 def _candidates_impl(x, surface, radius, skin, mask, plan):
     x, slave_ok = _inputs.sanitize_points(x, mask)
     segments = _inputs.resolve_segments(surface)
-    boxes, blocks = _broad_phase(x, slave_ok, segments, radius + skin, plan)
+    boxes, blocks = broad_phase(x, slave_ok, segments, radius + skin, plan)
     listed, overflow = None, blocks.overflow
     if plan.use_cells:
-        kept, ok = _kept_rows(x, slave_ok, blocks)
-        listed, cells_overflow = _list_candidates(kept, ok, segments, boxes, plan)
+        kept, ok = kept_rows(x, slave_ok, blocks)
+        listed, cells_overflow = list_candidates(kept, ok, segments, boxes, plan)
         overflow = overflow | cells_overflow
     return Candidates(blocks, listed, x, surface.nodes, skin, overflow)
 
@@ -212,21 +97,21 @@ def _contact_impl(x, surface, radius, mask, plan, found=None):
     num_rows = x.shape[0]
     no_overflow = jnp.zeros((), bool)
     if num_rows == 0 or segments.ok.shape[0] == 0:
-        return _empty_contact(x, no_overflow)
+        return empty_contact(x, no_overflow)
     if found is None:
-        boxes, blocks = _broad_phase(x, slave_ok, segments, radius, plan)
+        boxes, blocks = broad_phase(x, slave_ok, segments, radius, plan)
         listed, overflow = None, blocks.overflow
     else:
         boxes, blocks, listed, overflow = None, found.blocks, found.listed, found.overflow
 
     def narrow(_):
-        kept, ok = _kept_rows(x, slave_ok, blocks)
-        pair_value = _vmapped(squared_distance, kept)
-        choice, cells_overflow = _narrow(kept, ok, segments, boxes, pair_value, plan, listed)
+        kept, ok = kept_rows(x, slave_ok, blocks)
+        pair_value = vmapped(squared_distance, kept)
+        choice, cells_overflow = choose(kept, ok, segments, boxes, pair_value, plan, listed)
         part = contact_from_choice(kept, segments, choice, radius, cells_overflow, ok)
-        return _scatter_blocks(part, blocks, _empty_contact(x, cells_overflow), plan.block_size)
+        return scatter_blocks(part, blocks, empty_contact(x, cells_overflow), plan.block_size)
 
-    result = jax.lax.cond(blocks.count > 0, narrow, lambda _: _empty_contact(x, no_overflow), None)
+    result = jax.lax.cond(blocks.count > 0, narrow, lambda _: empty_contact(x, no_overflow), None)
     return result._replace(overflow=result.overflow | overflow)
 
 
@@ -236,17 +121,22 @@ def _crossing_impl(x_prev, x, surface, mask, plan):
     num_rows = x.shape[0]
     no_overflow = jnp.zeros((), bool)
     if num_rows == 0 or segments.ok.shape[0] == 0:
-        return _empty_crossing(x, no_overflow)
+        return empty_crossing(x, no_overflow)
     # A path meets a segment only if their boxes meet.
-    touching = segment_boxes(segments, conservative_margin(jnp.zeros((), x.dtype), segments.start, segments.end))
+    touching = segment_boxes(
+        segments, conservative_margin(jnp.zeros((), x.dtype), segments.start, segments.end)
+    )
     path_low, path_high = jnp.minimum(x_prev, x), jnp.maximum(x_prev, x)
     blocks = cull_blocks(
-        block_boxes(path_low, path_high, slave_ok, plan.block_size), enclosing(touching), num_rows,
-        plan.block_size, plan.block_capacity,
+        block_boxes(path_low, path_high, slave_ok, plan.block_size),
+        enclosing(touching),
+        num_rows,
+        plan.block_size,
+        plan.block_capacity,
     )
 
     def narrow(_):
-        start, ok = _kept_rows(x_prev, slave_ok, blocks)
+        start, ok = kept_rows(x_prev, slave_ok, blocks)
         end = x[jnp.minimum(blocks.rows, num_rows - 1)]
         # Where a path meets a segment, its start lies within the path's length
         # of that segment: bin the segments inflated by the longest kept path
@@ -258,11 +148,11 @@ def _crossing_impl(x_prev, x, surface, mask, plan):
             hit = path_hit(x_prev, x, a, b)
             return jnp.where(hit.hit, hit.t, jnp.inf)
 
-        choice, overflow = _narrow(start, ok, segments, boxes, _vmapped(hit_time, start, end), plan)
+        choice, overflow = choose(start, ok, segments, boxes, vmapped(hit_time, start, end), plan)
         part = crossing_from_choice(start, end, segments, choice, overflow, ok)
-        return _scatter_blocks(part, blocks, _empty_crossing(x, overflow), plan.block_size)
+        return scatter_blocks(part, blocks, empty_crossing(x, overflow), plan.block_size)
 
-    result = jax.lax.cond(blocks.count > 0, narrow, lambda _: _empty_crossing(x, no_overflow), None)
+    result = jax.lax.cond(blocks.count > 0, narrow, lambda _: empty_crossing(x, no_overflow), None)
     return result._replace(overflow=result.overflow | blocks.overflow)
 
 
@@ -382,7 +272,12 @@ def candidates_expired(candidates: Candidates, x: Array, surface: Surface) -> Ar
 
 
 def bucket_swept(
-    x_prev: Array, x: Array, surface: Surface, *, mask: Array | None = None, plan: BucketPlan | None = None
+    x_prev: Array,
+    x: Array,
+    surface: Surface,
+    *,
+    mask: Array | None = None,
+    plan: BucketPlan | None = None,
 ) -> Crossing:
     """First crossing of every slave's path with the master, by bucket sort.
 

@@ -76,7 +76,9 @@ def bin_segments(
     step_y = jnp.arange(span[1], dtype=jnp.int32)[None, None, :]
     cell_x = low[:, 0, None, None] + step_x
     cell_y = low[:, 1, None, None] + step_y
-    inside = ok[:, None, None] & (cell_x <= high[:, 0, None, None]) & (cell_y <= high[:, 1, None, None])
+    inside = (
+        ok[:, None, None] & (cell_x <= high[:, 0, None, None]) & (cell_y <= high[:, 1, None, None])
+    )
     cell = jnp.where(inside, cell_y * shape[0] + cell_x, num_cells).reshape(-1)
     segment = jnp.broadcast_to(
         jnp.arange(num_segments, dtype=jnp.int32)[:, None, None], inside.shape

@@ -16,6 +16,7 @@ from jaxcontact._geometry import path_hit, squared_distance
 from jaxcontact._search import lowest_score
 from jaxcontact._types import Array, Contact, Crossing, Surface
 
+
 def all_to_all(x: Array, surface: Surface, *, radius, mask: Array | None = None) -> Contact:
     """Closest master segment of every slave, by dense N x M projection.
 

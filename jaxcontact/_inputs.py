@@ -53,7 +53,9 @@ def check_mask(name: str, mask, length: int) -> Array | None:
     if not hasattr(mask, "dtype"):
         mask = np.asarray(mask)
     if np.shape(mask) != (length,) or mask.dtype != np.bool_:
-        raise ValueError(f"{name} must have shape ({length},) and dtype bool; got {_describe(mask)}")
+        raise ValueError(
+            f"{name} must have shape ({length},) and dtype bool; got {_describe(mask)}"
+        )
     return jnp.asarray(mask)
 
 

@@ -104,7 +104,9 @@ def plan_buckets(
       A ``BucketPlan``.
     """
     if (radius is None) == (x_prev is None):
-        raise ValueError("plan_buckets needs radius= (for bucket_sort) or x_prev= (for bucket_swept)")
+        raise ValueError(
+            "plan_buckets needs radius= (for bucket_sort) or x_prev= (for bucket_swept)"
+        )
     if slack < 1:
         raise ValueError(f"slack must be >= 1; got {slack}")
     x = _inputs.check_points("x", x)
@@ -127,7 +129,9 @@ def plan_buckets(
     num_blocks = -(-num_rows // block_size)
     if num_rows == 0 or num_segments == 0:
         return BucketPlan(num_rows, block_size, 1, for_paths)
-    cull_boxes = segment_boxes(segments, conservative_margin(cull_reach, segments.start, segments.end))
+    cull_boxes = segment_boxes(
+        segments, conservative_margin(cull_reach, segments.start, segments.end)
+    )
     blocks = cull_blocks(
         block_boxes(query_low, query_high, slave_ok, block_size),
         enclosing(cull_boxes),
@@ -194,7 +198,9 @@ def replan(plan: BucketPlan, x: Array, surface: Surface, **kwargs) -> BucketPlan
     """
     fresh = plan_buckets(x, surface, block_size=plan.block_size, use_cells=plan.use_cells, **kwargs)
     if fresh.for_paths != plan.for_paths or not plan.use_cells:
-        return dataclasses.replace(fresh, block_capacity=max(fresh.block_capacity, plan.block_capacity))
+        return dataclasses.replace(
+            fresh, block_capacity=max(fresh.block_capacity, plan.block_capacity)
+        )
     return dataclasses.replace(
         fresh,
         block_capacity=max(fresh.block_capacity, plan.block_capacity),

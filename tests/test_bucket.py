@@ -60,9 +60,8 @@ def assert_same_contact(binned, dense, radius=None, degenerate=False):
         np.testing.assert_allclose(distance, radius, atol=tol)
     agree = both & same
     for field in ("gap", "xi", "point", "normal"):
-        np.testing.assert_allclose(
-            np.asarray(getattr(binned, field))[agree], np.asarray(getattr(dense, field))[agree], atol=tol
-        )
+        got, want = np.asarray(getattr(binned, field)), np.asarray(getattr(dense, field))
+        np.testing.assert_allclose(got[agree], want[agree], atol=tol)
     if not degenerate:
         # Rows that differ for rounding must be rare, never the rule.
         assert (both & ~same).sum() <= max(2, 0.01 * both.sum())
@@ -75,7 +74,8 @@ def assert_same_crossing(binned, dense, degenerate=False):
     np.testing.assert_array_equal(binned.crossed, dense.crossed)
     np.testing.assert_allclose(binned.t, dense.t, atol=tol)
     same = np.asarray(binned.segment == dense.segment)
-    np.testing.assert_allclose(np.asarray(binned.point)[same], np.asarray(dense.point)[same], atol=tol)
+    got, want = np.asarray(binned.point), np.asarray(dense.point)
+    np.testing.assert_allclose(got[same], want[same], atol=tol)
     if not degenerate:
         assert (~same).sum() <= max(2, 0.01 * np.asarray(dense.crossed).sum())
 
@@ -198,7 +198,11 @@ def test_vmap_over_scenes_equals_loop():
     segments = scenes[0].surface.segments
     plans = [plan_buckets(s.x, s.surface, radius=0.1) for s in scenes]
     plan = max(plans, key=lambda p: p.block_capacity)
-    batched = jax.vmap(lambda x, n: bucket_sort(x, Surface(n, segments), radius=0.1, plan=plan))(x, nodes)
+
+    def detect(x, nodes):
+        return bucket_sort(x, Surface(nodes, segments), radius=0.1, plan=plan)
+
+    batched = jax.vmap(detect)(x, nodes)
     for i, scene in enumerate(scenes):
         row = jax.tree.map(lambda v, i=i: v[i], batched)
         assert_same_contact(row, all_to_all(scene.x, scene.surface, radius=0.1), 0.1)
@@ -214,7 +218,7 @@ def test_masks_nan_padding_and_empty_inputs():
     dense = all_to_all(x, surface, radius=0.1, mask=mask)
     assert_same_contact(binned, dense, 0.1)
     assert all(bool(jnp.all(jnp.isfinite(v))) for v in binned if v.dtype != bool)
-    empty = bucket_sort(jnp.zeros((0, 2)), scene.surface._replace(nodes=scene.surface.nodes), radius=0.1)
+    empty = bucket_sort(jnp.zeros((0, 2)), scene.surface, radius=0.1)
     assert empty.gap.shape == (0,)
     none = Surface(jnp.zeros((0, 2)), jnp.zeros((0, 2), jnp.int32))
     assert not bool(bucket_sort(scene.x, none, radius=0.1).found.any())
@@ -230,7 +234,8 @@ def test_gradients_through_bucket_sort_are_finite_and_match_dense():
 
     binned = jax.grad(lambda x, n: total(bucket_sort, x, n, plan=plan), argnums=(0, 1))
     dense = jax.grad(lambda x, n: total(all_to_all, x, n), argnums=(0, 1))
-    for got, want in zip(binned(scene.x, scene.surface.nodes), dense(scene.x, scene.surface.nodes)):
+    got_both = binned(scene.x, scene.surface.nodes)
+    for got, want in zip(got_both, dense(scene.x, scene.surface.nodes), strict=True):
         assert bool(jnp.all(jnp.isfinite(got)))
         np.testing.assert_allclose(got, want, atol=1e-12)
 
