@@ -47,6 +47,13 @@ def all_to_all(x: Array, surface: Surface, *, radius, mask: Array | None = None)
     mask = _inputs.check_mask("mask", mask, x.shape[0])
     surface = _inputs.check_surface(surface, x.dtype)
     radius = _inputs.check_radius(radius, x.dtype)
+    return _all_to_all(x, surface, radius, mask)
+
+
+# Compiled as one program even when called outside jit: op by op, the unrolled
+# search took seconds to dispatch on a new shape.
+@jax.jit
+def _all_to_all(x, surface, radius, mask):
     x, slave_ok = _inputs.sanitize_points(x, mask)
     segments = _inputs.resolve_segments(surface)
     to_segment = jax.vmap(squared_distance, in_axes=(0, None, None))
@@ -85,8 +92,17 @@ def swept(x_prev: Array, x: Array, surface: Surface, *, mask: Array | None = Non
       >>> crossing.crossed.tolist(), crossing.t.tolist(), crossing.point.tolist()
       ([True], [0.25], [[1.0, 1.0]])
     """
-    x_prev, x, slave_ok = _inputs.check_paths(x_prev, x, mask)
+    x_prev = _inputs.check_points("x_prev", x_prev)
+    x = _inputs.check_points("x", x, x_prev.dtype)
+    _inputs.check_paths(x_prev, x, mask)
+    mask = _inputs.check_mask("mask", mask, x.shape[0])
     surface = _inputs.check_surface(surface, x.dtype)
+    return _swept(x_prev, x, surface, mask)
+
+
+@jax.jit
+def _swept(x_prev, x, surface, mask):
+    x_prev, x, slave_ok = _inputs.check_paths(x_prev, x, mask)
     segments = _inputs.resolve_segments(surface)
     hit_of = jax.vmap(path_hit, in_axes=(0, 0, None, None))
 

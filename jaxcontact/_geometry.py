@@ -61,18 +61,24 @@ class Projection(NamedTuple):
 
 
 def _offset(x: Array, a: Array, b: Array) -> tuple[Array, Array, Array, Array]:
-    """``(x - p, p, xi, xi_free)`` for the closest point ``p`` of ``a -> b`` to ``x``."""
+    """``(x - p, p, xi, interior)`` for the closest point ``p`` of ``a -> b`` to ``x``."""
     d = b - a
     from_a = x - a
     from_b = x - b
-    xi_free = safe_divide(dot(from_a, d), dot(d, d))
-    xi = jnp.clip(xi_free, 0, 1)
+    along_a = dot(from_a, d)
+    along_b = dot(from_b, d)
+    # The clamps are decided by sign, not from the rounded ratio, so a slave
+    # exactly at an end point gets xi exactly 0 or 1 (a ratio can round to
+    # 0.9999999999999999 there and break an exact tie at a shared vertex).
+    before, after = along_a <= 0, along_b >= 0
+    ratio = jnp.clip(safe_divide(along_a, dot(d, d)), 0, 1)
+    xi = jnp.where(before, 0, jnp.where(after, 1, ratio)).astype(x.dtype)
     # Measure from the nearer end point: exact at both ends (so slaves at a
     # vertex shared by two segments tie exactly) and short differences elsewhere.
     near_a = xi <= 0.5
     offset = jnp.where(near_a, from_a - xi * d, from_b + (1 - xi) * d)
     point = jnp.where(near_a, a + xi * d, b - (1 - xi) * d)
-    return offset, point, xi, xi_free
+    return offset, point, xi, ~before & ~after
 
 
 def squared_distance(x: Array, a: Array, b: Array) -> Array:
@@ -101,12 +107,11 @@ def project(x: Array, a: Array, b: Array) -> Projection:
     Returns:
       A ``Projection`` of scalars and ``(2,)`` vectors.
     """
-    offset, point, xi, xi_free = _offset(x, a, b)
+    offset, point, xi, interior = _offset(x, a, b)
     d = b - a
     distance_squared = dot(offset, offset)
     normal = safe_divide(jnp.stack([d[1], -d[0]]), safe_sqrt(dot(d, d)))
     normal_offset = dot(offset, normal)
-    interior = (xi_free > 0) & (xi_free < 1)
     corner_sign = jnp.where(normal_offset < 0, -1, 1).astype(x.dtype)
     gap = jnp.where(interior, normal_offset, corner_sign * safe_sqrt(distance_squared))
     return Projection(distance_squared, gap, xi, point, normal)
@@ -152,7 +157,16 @@ def path_hit(x_prev: Array, x: Array, a: Array, b: Array) -> PathHit:
     meets_line = ((side_prev <= 0) & (side_now >= 0)) | ((side_prev >= 0) & (side_now <= 0))
     straddles = ((side_a <= 0) & (side_b >= 0)) | ((side_a >= 0) & (side_b <= 0))
     transversal = side_prev != side_now
-    t_transversal = jnp.clip(safe_divide(side_prev, side_prev - side_now), 0, 1)
+    t_lines = safe_divide(side_prev, side_prev - side_now)
+    # Where the path's line runs exactly through an end point, the meeting
+    # point is that end point: t from it alone is the same number for both
+    # segments sharing it, so an exact tie at a shared vertex stays exact.
+    length_u = dot(u, u)
+    t_at_a = safe_divide(dot(a - x_prev, u), length_u)
+    t_at_b = safe_divide(dot(b - x_prev, u), length_u)
+    t_vertex = jnp.where(side_a == 0, t_at_a, jnp.where(side_b == 0, t_at_b, t_lines))
+    t_inner = jnp.where(side_prev == 0, 0, jnp.where(side_now == 0, 1, t_vertex))
+    t_transversal = jnp.clip(t_inner, 0, 1).astype(x.dtype)
     hit_transversal = transversal & meets_line & straddles
 
     # Both path ends on the segment's line (collinear or zero motion): track the

@@ -31,7 +31,7 @@ def _describe(value) -> str:
 def check_points(name: str, points, dtype=None) -> Array:
     """Checks ``points`` is f[N, 2] (of ``dtype`` if given) and returns it as an array."""
     if not hasattr(points, "dtype"):
-        points = np.asarray(points)
+        points = jnp.asarray(points)
     kind = np.dtype(points.dtype).kind
     if np.ndim(points) != 2 or np.shape(points)[-1] != 2:
         raise ValueError(f"{name} must have shape (N, 2); got {_describe(points)}")

@@ -1,0 +1,186 @@
+"""A brute-force oracle, written from API.md alone, that returns float64 NumPy arrays.
+
+Plain loops over every (slave, segment) pair, one textbook formula each; it
+shares no code with the package. Every input float is an exact rational, and
+the oracle computes in exact rational arithmetic (``fractions.Fraction``):
+closest points, squared distances, crossing times, and so every comparison
+(which segment is nearest, which crossing is first, whether a distance is
+within the radius, whether a path touches an end point) is decided exactly,
+ties included. Values are rounded to float64 once, at the end (a square root
+and a division by a length are the only other roundings). So the oracle of a
+float32 scene is the float64 answer for the very same float32 numbers, and no
+rounding of the oracle's own can decide a tie or a boundary case.
+"""
+
+from __future__ import annotations
+
+import math
+from fractions import Fraction
+from typing import NamedTuple
+
+import numpy as np
+
+
+class OracleContact(NamedTuple):
+    gap: np.ndarray  # f64[N]
+    xi: np.ndarray  # f64[N]
+    segment: np.ndarray  # i64[N], -1 where not found
+    point: np.ndarray  # f64[N, 2]
+    normal: np.ndarray  # f64[N, 2]
+    found: np.ndarray  # bool[N]
+    active: np.ndarray  # bool[N]
+
+
+class OracleCrossing(NamedTuple):
+    t: np.ndarray  # f64[N]
+    segment: np.ndarray  # i64[N], -1 where none
+    point: np.ndarray  # f64[N, 2]
+    crossed: np.ndarray  # bool[N]
+
+
+def _exact(row) -> tuple[Fraction, Fraction]:
+    """One (2,) float row as an exact rational pair."""
+    u, v = np.asarray(row).reshape(2)
+    return Fraction(float(u)), Fraction(float(v))
+
+
+def _rows(points) -> np.ndarray:
+    return np.asarray(points).reshape(-1, 2)
+
+
+def _sub(p, q):
+    return (p[0] - q[0], p[1] - q[1])
+
+
+def _add_scaled(p, s, v):
+    return (p[0] + s * v[0], p[1] + s * v[1])
+
+
+def _dot(u, v):
+    return u[0] * v[0] + u[1] * v[1]
+
+
+def _cross(u, v):
+    return u[0] * v[1] - u[1] * v[0]
+
+
+def _floats(p) -> list[float]:
+    return [float(p[0]), float(p[1])]
+
+
+def _is_on(mask, row) -> bool:
+    return mask is None or bool(np.asarray(mask)[row])
+
+
+def _real_segments(nodes, segments, seg_mask):
+    """``(k, a, b)`` for every real segment of non-zero length, in index order."""
+    segments = np.asarray(segments).reshape(-1, 2)
+    nodes = np.asarray(nodes).reshape(-1, 2)
+    real = []
+    for k, (i, j) in enumerate(segments):
+        if not _is_on(seg_mask, k):
+            continue  # masked: its nodes may be padding (NaN, inf), never read
+        a, b = _exact(nodes[int(i)]), _exact(nodes[int(j)])
+        if a != b:  # zero length: ignored as if masked out
+            real.append((k, a, b))
+    return real
+
+
+def closest_point(x, a, b):
+    """``(distance_squared, xi_free, xi, point)`` of segment ``a -> b`` for slave ``x``, exact."""
+    d = _sub(b, a)
+    xi_free = _dot(_sub(x, a), d) / _dot(d, d)
+    xi = min(max(xi_free, Fraction(0)), Fraction(1))
+    point = _add_scaled(a, xi, d)
+    offset = _sub(x, point)
+    return _dot(offset, offset), xi_free, xi, point
+
+
+def oracle_contact(x, nodes, segments, seg_mask=None, slave_mask=None, radius=0.0) -> OracleContact:
+    """The ``Contact`` API.md describes, by looping over every pair."""
+    slaves = _rows(x)
+    count = len(slaves)
+    result = OracleContact(
+        gap=np.zeros(count),
+        xi=np.zeros(count),
+        segment=np.full(count, -1, np.int64),
+        point=np.zeros((count, 2)),
+        normal=np.zeros((count, 2)),
+        found=np.zeros(count, bool),
+        active=np.zeros(count, bool),
+    )
+    real = _real_segments(nodes, segments, seg_mask)
+    radius_squared = Fraction(float(radius)) ** 2
+    for i, row in enumerate(slaves):
+        if not _is_on(slave_mask, i) or not real:
+            continue  # masked: the row may be padding (NaN, inf), never read
+        slave = _exact(row)
+        # min() keeps the first of equal keys: an exact tie goes to the lower index.
+        (k, a, b), (distance_squared, xi_free, xi, point) = min(
+            ((segment, closest_point(slave, *segment[1:])) for segment in real),
+            key=lambda candidate: candidate[1][0],
+        )
+        if distance_squared > radius_squared:
+            continue
+        d = _sub(b, a)
+        length = math.sqrt(float(_dot(d, d)))
+        # (x - p) . n times |b - a|, exactly; n = (d_y, -d_x) / |b - a|.
+        normal_offset = _cross(_sub(slave, point), d)
+        if 0 < xi_free < 1:
+            gap = float(normal_offset) / length
+        else:
+            # Magnitude |x - p|, sign of (x - p) . n; zero counts as positive.
+            gap = math.copysign(math.sqrt(float(distance_squared)), -1 if normal_offset < 0 else 1)
+        result.gap[i], result.xi[i], result.segment[i] = gap, float(xi), k
+        result.point[i] = _floats(point)
+        result.normal[i] = [float(d[1]) / length, -float(d[0]) / length]
+        result.found[i], result.active[i] = True, gap < 0
+    return result
+
+
+def first_meeting(p0, p1, a, b):
+    """The smallest ``t`` in [0, 1] with ``p0 + t (p1 - p0)`` on ``a -> b`` (exact), or None."""
+    u, d, w = _sub(p1, p0), _sub(b, a), _sub(a, p0)
+    denominator = _cross(u, d)
+    if denominator != 0:
+        # p0 + t u = a + s d, solved by Cramer's rule.
+        t = _cross(w, d) / denominator
+        s = _cross(w, u) / denominator
+        return t if (0 <= t <= 1 and 0 <= s <= 1) else None
+    if _cross(d, _sub(p0, a)) != 0:
+        return None  # parallel (or not moving) and off the segment's line
+    # On the segment's line: s(t) = s0 + t (s1 - s0) must reach [0, 1].
+    length_squared = _dot(d, d)
+    s0 = _dot(_sub(p0, a), d) / length_squared
+    s1 = _dot(_sub(p1, a), d) / length_squared
+    if 0 <= s0 <= 1:
+        return Fraction(0)
+    if s1 == s0:
+        return None
+    t = ((0 if s0 < 0 else 1) - s0) / (s1 - s0)
+    return t if 0 <= t <= 1 else None
+
+
+def oracle_crossing(x_prev, x, nodes, segments, seg_mask=None, slave_mask=None) -> OracleCrossing:
+    """The ``Crossing`` API.md describes, by looping over every pair."""
+    starts, ends = _rows(x_prev), _rows(x)
+    count = len(ends)
+    result = OracleCrossing(
+        t=np.zeros(count),
+        segment=np.full(count, -1, np.int64),
+        point=np.zeros((count, 2)),
+        crossed=np.zeros(count, bool),
+    )
+    real = _real_segments(nodes, segments, seg_mask)
+    for i in range(count):
+        if not _is_on(slave_mask, i):
+            continue  # masked: the rows may be padding (NaN, inf), never read
+        start, end = _exact(starts[i]), _exact(ends[i])
+        meetings = [(first_meeting(start, end, a, b), k) for k, a, b in real]
+        meetings = [(t, k) for t, k in meetings if t is not None]
+        if not meetings:
+            continue
+        t, k = min(meetings)  # earliest; of equal times, the lower index
+        result.t[i], result.segment[i], result.crossed[i] = float(t), k, True
+        result.point[i] = _floats(_add_scaled(start, t, _sub(end, start)))
+    return result

@@ -1,0 +1,270 @@
+"""``all_to_all`` against the brute-force oracle, and each special case of API.md."""
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import jaxcontact
+from jaxcontact import Surface
+from tests import helpers
+from tests.oracle import oracle_contact
+
+# Jitted once at module level so scenes of equal shapes share one compilation.
+all_to_all = jax.jit(jaxcontact.all_to_all)
+
+DTYPES = pytest.mark.parametrize("dtype", helpers.FLOAT_DTYPES, ids=lambda d: np.dtype(d).name)
+
+# A counter-clockwise unit square: normals point out of it.
+SQUARE_NODES = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]
+SQUARE_SEGMENTS = [[0, 1], [1, 2], [2, 3], [3, 0]]
+
+
+def checked_contact(x, nodes, segments, *, radius, dtype=np.float64):
+    """Runs ``all_to_all`` on a hand-made scene (padded to ``helpers.CAPACITY``),
+    checks every field against the oracle and returns the rows of the real slaves."""
+    scene = helpers.padded_scene(x, x, nodes, segments, radius=radius, dtype=dtype)
+    contact = checked_scene(scene)
+    num_slaves = len(np.asarray(x).reshape(-1, 2))
+    assert not contact.found[num_slaves:].any()
+    return jax.tree.map(lambda field: field[:num_slaves] if field.ndim else field, contact)
+
+
+def checked_scene(scene: helpers.Scene, **tolerance):
+    """Runs ``all_to_all`` on a random scene as it is, checks every field against the oracle."""
+    contact = all_to_all(
+        jnp.asarray(scene.x),
+        helpers.surface_of(scene),
+        radius=scene.radius,
+        mask=helpers.slave_mask_of(scene),
+    )
+    helpers.assert_contact_matches(
+        contact, helpers.contact_oracle(scene), scene.x.dtype, **tolerance
+    )
+    return contact
+
+
+# Sizes in float64 only (float32 random scenes are compared below and in
+# test_transforms.py): each size is a compilation.
+@pytest.mark.parametrize("num_segments", [0, 1, 5])
+@pytest.mark.parametrize("num_slaves", [0, 1, 9])
+def test_matches_oracle_on_random_masked_scenes(num_slaves, num_segments):
+    for seed in range(4):
+        scene = helpers.random_scene(seed, num_slaves, num_segments, masked=True)
+        checked_scene(scene)
+
+
+def test_matches_oracle_on_random_scenes_without_masks():
+    found = 0
+    for seed in range(4):
+        scene = helpers.random_scene(seed, 9, 5)
+        found += int(checked_scene(scene).found.sum())
+    # The scenes must exercise both outcomes for the comparison to mean anything.
+    assert 0 < found < 4 * 9
+
+
+def test_first_index_wins_a_tie_across_segment_blocks(monkeypatch):
+    # Segments are scanned in unrolled blocks of _search._BLOCK (32) inside a
+    # lax.scan. Covering that path with M > 32 costs ~20 s of compilation, so
+    # the block is shrunk instead: ten segments take three blocks, the last one
+    # ragged. The second half repeats the first, so every slave ties exactly
+    # between k and k + 5 and must get the lower index.
+    monkeypatch.setattr(jaxcontact._search, "_BLOCK", 4)
+    scene = helpers.random_scene(7, 9, 5, np.float64)
+    doubled = np.concatenate([scene.segments, scene.segments])
+    # A fresh function, so that no cached trace made with the real block size is reused.
+    fresh = jax.jit(lambda x, surface: jaxcontact.all_to_all(x, surface, radius=10.0))
+    contact = fresh(jnp.asarray(scene.x), Surface(jnp.asarray(scene.nodes), jnp.asarray(doubled)))
+    expected = oracle_contact(scene.x, scene.nodes, doubled, radius=10.0)
+    helpers.assert_contact_matches(contact, expected, np.float64)
+    assert np.all(expected.segment < 5)
+
+
+def check_ties_at_random_shared_vertices(dtype, place):
+    """Slaves placed by ``place(vertex, previous, following)`` at the shared
+    vertices of random outlines, checked against the oracle (which decides ties
+    exactly); returns how many of them were found."""
+    found = 0
+    for seed in range(6):
+        scene = helpers.random_scene(seed, 9, 5, dtype, masked=True)
+        slaves = [place(*corner) for corner in helpers.shared_vertices(scene)]
+        if not slaves:
+            continue
+        x = scene.x.copy()
+        x[: len(slaves)] = slaves
+        scene = scene._replace(x=x, slave_mask=np.ones(9, bool), seg_mask=None)
+        found += int(checked_scene(scene).found[: len(slaves)].sum())
+    return found
+
+
+@DTYPES
+def test_slaves_in_blind_spots_of_random_outlines_tie_to_lower_index(dtype):
+    # In the blind spot beside a shared vertex both segments' closest point is
+    # the vertex itself: an exact tie whatever the (non-dyadic) coordinates.
+    def beside(vertex, previous, following):
+        return helpers.blind_spot(vertex, previous, following, 0.1)
+
+    assert check_ties_at_random_shared_vertices(dtype, beside) >= 6
+
+
+# Regression (found by this suite): a slave exactly on the vertex V shared by
+# segment k (ending at V) and k + 1 (starting at V) is at distance 0 from both
+# and must get k. The clamp of xi used to come from the rounded ratio
+# (x - a).d / d.d, which FMA contraction made 1 - 1 ulp, so k + 1 won by 1e-17.
+# The clamps are now decided by sign. Dyadic coordinates hid it.
+@DTYPES
+def test_slaves_on_shared_vertices_of_random_outlines_tie_to_lower_index(dtype):
+    def on(vertex, previous, following):
+        return vertex
+
+    assert check_ties_at_random_shared_vertices(dtype, on) >= 6
+
+
+def test_slave_on_segment_interior_has_zero_gap_and_is_not_active():
+    # Floor from (2, 0) to (0, 0): its outward normal points up.
+    contact = checked_contact(
+        [[0.5, 0.0], [0.5, 0.125], [0.5, -0.125]], [[2.0, 0.0], [0.0, 0.0]], [[0, 1]], radius=0.5
+    )
+    np.testing.assert_array_equal(contact.gap, [0.0, 0.125, -0.125])
+    np.testing.assert_array_equal(contact.xi, [0.75, 0.75, 0.75])
+    np.testing.assert_array_equal(contact.point, [[0.5, 0.0]] * 3)
+    np.testing.assert_array_equal(contact.normal, [[0.0, 1.0]] * 3)
+    np.testing.assert_array_equal(contact.active, [False, False, True])
+
+
+@DTYPES
+def test_slave_on_shared_vertex_goes_to_lower_index(dtype):
+    # (1, 0) ends segment 0 and starts segment 1; (0, 0) starts segment 0 and
+    # ends segment 3. Both tie exactly (distance 0), so both get segment 0.
+    contact = checked_contact(
+        [[1.0, 0.0], [0.0, 0.0], [1.0, 1.0]],
+        SQUARE_NODES,
+        SQUARE_SEGMENTS,
+        radius=0.25,
+        dtype=dtype,
+    )
+    np.testing.assert_array_equal(contact.segment, [0, 0, 1])
+    np.testing.assert_array_equal(contact.xi, [1.0, 0.0, 1.0])
+    np.testing.assert_array_equal(contact.gap, [0.0, 0.0, 0.0])
+    np.testing.assert_array_equal(contact.point, [[1.0, 0.0], [0.0, 0.0], [1.0, 1.0]])
+
+
+@DTYPES
+def test_blind_spot_outside_convex_corner_ties_to_lower_index_at_corner_distance(dtype):
+    # Outside the corner both segments' closest point is the vertex; the
+    # distance 0.625 = |(0.375, 0.5)| is exact, and the gap is positive.
+    contact = checked_contact(
+        [[1.375, -0.5], [-0.375, -0.5], [1.5, 1.375]],
+        SQUARE_NODES,
+        SQUARE_SEGMENTS,
+        radius=1.0,
+        dtype=dtype,
+    )
+    np.testing.assert_array_equal(contact.segment, [0, 0, 1])
+    np.testing.assert_array_equal(contact.gap, [0.625, 0.625, 0.625])
+    np.testing.assert_array_equal(contact.xi, [1.0, 0.0, 1.0])
+    np.testing.assert_array_equal(contact.normal, [[0.0, -1.0], [0.0, -1.0], [1.0, 0.0]])
+    assert not contact.active.any()
+
+
+@DTYPES
+def test_concave_corner_picks_nearer_face_and_ties_on_bisector_to_lower_index(dtype):
+    # The master fills {y < 0} u {x < 0}; its outline (2, 0) -> (0, 0) -> (0, 2)
+    # has a concave corner at the origin.
+    nodes, segments = [[2.0, 0.0], [0.0, 0.0], [0.0, 2.0]], [[0, 1], [1, 2]]
+    slaves = [[0.5, 0.25], [0.25, 0.5], [0.25, 0.25], [0.5, -0.25], [-0.125, 0.5]]
+    contact = checked_contact(slaves, nodes, segments, radius=1.0, dtype=dtype)
+    np.testing.assert_array_equal(contact.segment, [0, 1, 0, 0, 1])
+    np.testing.assert_array_equal(contact.gap, [0.25, 0.25, 0.25, -0.25, -0.125])
+    np.testing.assert_array_equal(contact.xi, [0.75, 0.25, 0.875, 0.75, 0.25])
+    np.testing.assert_array_equal(contact.active, [False, False, False, True, True])
+
+
+def test_zero_length_segment_is_ignored():
+    # Segment 0 and segment 2 have zero length (distinct nodes at one place,
+    # and one node used twice); the slaves sit exactly on them.
+    nodes = [[0.0, 0.0], [0.0, 0.0], [1.0, 0.0], [3.0, 0.0]]
+    contact = checked_contact([[0.0, 0.0], [1.0, 0.0]], nodes, [[0, 1], [2, 3], [2, 2]], radius=2.0)
+    np.testing.assert_array_equal(contact.segment, [1, 1])
+    np.testing.assert_array_equal(contact.gap, [1.0, 0.0])
+
+
+def test_only_zero_length_segments_find_nothing():
+    contact = checked_contact([[0.0, 0.0]], [[0.0, 0.0], [0.0, 0.0]], [[0, 1], [1, 1]], radius=5.0)
+    assert not contact.found.any()
+    np.testing.assert_array_equal(contact.segment, [-1])
+
+
+@pytest.mark.parametrize("masked", ["slaves", "segments"])
+def test_everything_masked_finds_nothing(masked):
+    scene = helpers.random_scene(3, 9, 5, masked=True)
+    if masked == "slaves":
+        scene = scene._replace(slave_mask=np.zeros(9, bool))
+    else:
+        scene = scene._replace(seg_mask=np.zeros(5, bool))
+    contact = checked_scene(scene._replace(radius=100.0))
+    assert not contact.found.any() and not contact.active.any()
+    np.testing.assert_array_equal(contact.segment, np.full(9, -1))
+    for field in (contact.gap, contact.xi, contact.point, contact.normal):
+        np.testing.assert_array_equal(field, np.zeros_like(field))
+
+
+@pytest.mark.parametrize("fill", [np.nan, np.inf, -np.inf], ids=["nan", "inf", "-inf"])
+def test_nan_and_inf_padding_leaves_real_rows_unchanged(fill):
+    # Some real slaves and segments are masked too (finite, as real data).
+    scene = helpers.random_scene(5, 9, 5, masked=True)
+    plain = checked_scene(scene)
+    padded_scene, slave_rows, segment_rows = helpers.pad_scene(scene, fill)
+    padded = checked_scene(padded_scene)  # also asserts every output is finite
+    segment = np.asarray(plain.segment)
+    mapped = np.where(segment >= 0, segment_rows[np.maximum(segment, 0)], -1)
+    np.testing.assert_array_equal(padded.segment[slave_rows], mapped)
+    for field in ("gap", "xi", "point", "normal", "found", "active"):
+        np.testing.assert_array_equal(getattr(padded, field)[slave_rows], getattr(plain, field))
+    padding = np.ones(len(padded_scene.x), bool)
+    padding[slave_rows] = False
+    assert not padded.found[padding].any()
+    np.testing.assert_array_equal(padded.segment[padding], -1)
+
+
+@DTYPES
+def test_radius_boundary_is_inclusive(dtype):
+    beyond = np.nextafter(dtype(0.25), dtype(1))
+    # Floor (2, 0) -> (0, 0), normal up: gaps of exactly +-0.25 and one ulp more.
+    slaves = [[0.5, 0.25], [0.5, -0.25], [0.5, beyond], [0.5, -beyond]]
+    contact = checked_contact(slaves, [[2.0, 0.0], [0.0, 0.0]], [[0, 1]], radius=0.25, dtype=dtype)
+    np.testing.assert_array_equal(contact.found, [True, True, False, False])
+
+
+@DTYPES
+def test_radius_boundary_is_inclusive_at_a_corner(dtype):
+    # Beyond the end (2, 0) the distance is |(0.375, 0.5)| = 0.625 exactly. Two
+    # ulps more in y (not one) so that the rounded square root is surely larger.
+    beyond = np.nextafter(np.nextafter(dtype(0.5), dtype(1)), dtype(1))
+    slaves = [[2.375, 0.5], [2.375, beyond]]
+    contact = checked_contact(slaves, [[2.0, 0.0], [0.0, 0.0]], [[0, 1]], radius=0.625, dtype=dtype)
+    np.testing.assert_array_equal(contact.found, [True, False])
+
+
+def test_zero_radius_finds_only_slaves_on_the_surface():
+    # The smallest normal float64 above the floor. (Not a subnormal: XLA on the
+    # CPU flushes subnormals to zero, so no JAX program can see them.)
+    off = np.finfo(np.float64).tiny
+    slaves = [[0.5, 0.0], [2.0, 0.0], [0.0, 0.0], [0.5, off], [0.5, 1e-300]]
+    contact = checked_contact(slaves, [[2.0, 0.0], [0.0, 0.0]], [[0, 1]], radius=0.0)
+    np.testing.assert_array_equal(contact.found, [True, True, True, False, False])
+    np.testing.assert_array_equal(contact.gap, np.zeros(5))
+
+
+@pytest.mark.parametrize("offset", [1e4, 1e6])
+def test_float32_far_from_origin_keeps_local_accuracy(offset):
+    # The oracle runs in float64 on the very same float32 inputs, so it is the
+    # exact answer for them. Gap and xi are functions of differences of nearby
+    # inputs (exact in float32 by Sterbenz's lemma), so their error can stay at
+    # a few ulps of the local geometry, whatever the offset. The point is a
+    # coordinate near ``offset``: the exact closest point is generally not a
+    # float32 number, so rounding it alone costs up to half an ulp of
+    # ``offset``; one ulp (plus the local error) is the honest bound.
+    for seed in range(4):
+        scene = helpers.random_scene(seed, 9, 5, np.float32, masked=True, offset=offset, scale=2.0)
+        checked_scene(scene, scale=2.0, offset=offset)

@@ -1,0 +1,149 @@
+"""Bad inputs raise ``ValueError`` naming the argument, at trace time where they can."""
+
+import re
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import jaxcontact
+from jaxcontact import Surface
+
+X = np.array([[0.5, 0.25], [1.5, -0.5]])
+NODES = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]])
+SEGMENTS = np.array([[0, 1], [1, 2]], np.int32)
+SURFACE = Surface(jnp.asarray(NODES), jnp.asarray(SEGMENTS))
+
+# Shape and dtype errors must raise under jit too (they are known at trace time).
+TRANSFORMS = pytest.mark.parametrize("transform", [lambda f: f, jax.jit], ids=["plain", "jit"])
+
+
+def contact(x=X, surface=SURFACE, radius=0.5, mask=None):
+    return jaxcontact.all_to_all(x, surface, radius=radius, mask=mask)
+
+
+def crossing(x_prev=X, x=X, surface=SURFACE, mask=None):
+    return jaxcontact.swept(x_prev, x, surface, mask=mask)
+
+
+# (argument name as the message must start, bad call); each message must
+# start with the name of the argument at fault.
+BAD_SHAPES_AND_DTYPES = {
+    "x_rank_1": ("x", lambda: contact(x=X[0])),
+    "x_rank_3": ("x", lambda: contact(x=X[None])),
+    "x_trailing_3": ("x", lambda: contact(x=np.zeros((2, 3)))),
+    "x_integer": ("x", lambda: contact(x=X.astype(np.int32))),
+    "x_complex": ("x", lambda: contact(x=X.astype(np.complex64))),
+    "x_bool": ("x", lambda: contact(x=X > 0)),
+    "nodes_rank_1": ("surface.nodes", lambda: contact(surface=SURFACE._replace(nodes=NODES[0]))),
+    "nodes_trailing_3": (
+        "surface.nodes",
+        lambda: contact(surface=SURFACE._replace(nodes=np.zeros((3, 3)))),
+    ),
+    "nodes_float32_x_float64": (
+        "surface.nodes",
+        lambda: contact(surface=SURFACE._replace(nodes=NODES.astype(np.float32))),
+    ),
+    "nodes_float64_x_float32": ("surface.nodes", lambda: contact(x=X.astype(np.float32))),
+    "nodes_integer": (
+        "surface.nodes",
+        lambda: contact(surface=SURFACE._replace(nodes=NODES.astype(np.int64))),
+    ),
+    "segments_float": (
+        "surface.segments",
+        lambda: contact(surface=SURFACE._replace(segments=SEGMENTS.astype(np.float64))),
+    ),
+    "segments_bool": (
+        "surface.segments",
+        lambda: contact(surface=SURFACE._replace(segments=SEGMENTS > 0)),
+    ),
+    "segments_rank_1": (
+        "surface.segments",
+        lambda: contact(surface=SURFACE._replace(segments=SEGMENTS[0])),
+    ),
+    "segments_trailing_3": (
+        "surface.segments",
+        lambda: contact(surface=SURFACE._replace(segments=np.zeros((2, 3), np.int32))),
+    ),
+    "surface_mask_wrong_length": (
+        "surface.mask",
+        lambda: contact(surface=SURFACE._replace(mask=np.ones(3, bool))),
+    ),
+    "surface_mask_integer": (
+        "surface.mask",
+        lambda: contact(surface=SURFACE._replace(mask=np.ones(2, np.int32))),
+    ),
+    "mask_wrong_length": ("mask", lambda: contact(mask=np.ones(3, bool))),
+    "mask_rank_2": ("mask", lambda: contact(mask=np.ones((2, 1), bool))),
+    "mask_float": ("mask", lambda: contact(mask=np.ones(2))),
+    "radius_not_scalar": ("radius", lambda: contact(radius=np.array([0.5]))),
+    "radius_complex": ("radius", lambda: contact(radius=0.5 + 0j)),
+    "swept_x_prev_rank_3": ("x_prev", lambda: crossing(x_prev=X[None])),
+    "swept_x_prev_integer": ("x_prev", lambda: crossing(x_prev=X.astype(np.int32))),
+    "swept_x_trailing_3": ("x", lambda: crossing(x=np.zeros((2, 3)))),
+    "swept_x_shape_differs": ("x", lambda: crossing(x=np.zeros((3, 2)))),
+    "swept_x_dtype_differs": ("x", lambda: crossing(x=X.astype(np.float32))),
+    "swept_x_complex": ("x", lambda: crossing(x=X.astype(np.complex128))),
+    "swept_nodes_dtype_differs": (
+        "surface.nodes",
+        lambda: crossing(surface=SURFACE._replace(nodes=NODES.astype(np.float32))),
+    ),
+    "swept_segments_float": (
+        "surface.segments",
+        lambda: crossing(surface=SURFACE._replace(segments=SEGMENTS.astype(np.float32))),
+    ),
+    "swept_mask_wrong_length": ("mask", lambda: crossing(mask=np.ones(1, bool))),
+    "swept_mask_integer": ("mask", lambda: crossing(mask=np.ones(2, np.int8))),
+}
+
+
+@pytest.mark.parametrize("case", list(BAD_SHAPES_AND_DTYPES))
+def test_bad_shape_or_dtype_raises_naming_the_argument(case):
+    name, call = BAD_SHAPES_AND_DTYPES[case]
+    with pytest.raises(ValueError, match=rf"^{re.escape(name)}\b(?!\.)"):
+        call()
+
+
+@TRANSFORMS
+def test_bad_shapes_raise_at_trace_time(transform):
+    with pytest.raises(ValueError, match=r"^x\b(?!\.)"):
+        transform(contact)(np.zeros((2, 3)))
+    with pytest.raises(ValueError, match=r"^surface\.nodes\b"):
+        transform(contact)(X, SURFACE._replace(nodes=jnp.asarray(NODES, jnp.float32)))
+    with pytest.raises(ValueError, match=r"^x\b(?!\.)"):
+        transform(crossing)(X, np.zeros((3, 2)))
+
+
+def test_surface_must_be_a_surface():
+    with pytest.raises(ValueError, match=r"^surface\b"):
+        contact(surface=(NODES, SEGMENTS))
+
+
+# Value errors: only where the values are concrete (outside jit).
+BAD_VALUES = {
+    "segment_index_too_large": (
+        "surface.segments",
+        lambda: contact(surface=SURFACE._replace(segments=np.array([[0, 1], [1, 3]], np.int32))),
+    ),
+    "segment_index_negative": (
+        "surface.segments",
+        lambda: contact(surface=SURFACE._replace(segments=np.array([[0, 1], [-1, 2]], np.int32))),
+    ),
+    "swept_segment_index_too_large": (
+        "surface.segments",
+        lambda: crossing(surface=SURFACE._replace(segments=np.array([[0, 3]], np.int32))),
+    ),
+    "radius_negative": ("radius", lambda: contact(radius=-0.25)),
+    "radius_tiny_negative": ("radius", lambda: contact(radius=-np.finfo(np.float64).tiny)),
+    "radius_nan": ("radius", lambda: contact(radius=np.nan)),
+    "radius_inf": ("radius", lambda: contact(radius=np.inf)),
+    "radius_nan_array": ("radius", lambda: contact(radius=jnp.asarray(np.nan))),
+}
+
+
+@pytest.mark.parametrize("case", list(BAD_VALUES))
+def test_bad_concrete_value_raises_naming_the_argument(case):
+    name, call = BAD_VALUES[case]
+    with pytest.raises(ValueError, match=rf"^{re.escape(name)}\b(?!\.)"):
+        call()
