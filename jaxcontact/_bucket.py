@@ -33,7 +33,7 @@ from jaxcontact._broad import (
     enclosing,
     segment_boxes,
 )
-from jaxcontact._geometry import path_hit, squared_distance
+from jaxcontact._geometry import closeness, first_hit_time
 from jaxcontact._narrow import (
     broad_phase,
     choose,
@@ -106,7 +106,7 @@ def _contact_impl(x, surface, radius, mask, plan, found=None):
 
     def narrow(_):
         kept, ok = kept_rows(x, slave_ok, blocks)
-        pair_value = vmapped(squared_distance, kept)
+        pair_value = vmapped(closeness, kept)
         choice, cells_overflow = choose(kept, ok, segments, boxes, pair_value, plan, listed)
         part = contact_from_choice(kept, segments, choice, radius, cells_overflow, ok)
         return scatter_blocks(part, blocks, empty_contact(x, cells_overflow), plan.block_size)
@@ -143,12 +143,8 @@ def _crossing_impl(x_prev, x, surface, mask, plan):
         # and look up each path's start (the paper's boxes inflated by d_max).
         longest = jnp.max(jnp.where(ok, jnp.max(jnp.abs(end - start), axis=-1), 0), initial=0)
         boxes = segment_boxes(segments, conservative_margin(longest, segments.start, segments.end))
-
-        def hit_time(x_prev, x, a, b):
-            hit = path_hit(x_prev, x, a, b)
-            return jnp.where(hit.hit, hit.t, jnp.inf)
-
-        choice, overflow = choose(start, ok, segments, boxes, vmapped(hit_time, start, end), plan)
+        pair_value = vmapped(first_hit_time, start, end)
+        choice, overflow = choose(start, ok, segments, boxes, pair_value, plan)
         part = crossing_from_choice(start, end, segments, choice, overflow, ok)
         return scatter_blocks(part, blocks, empty_crossing(x, overflow), plan.block_size)
 

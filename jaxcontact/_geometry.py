@@ -81,13 +81,27 @@ def _offset(x: Array, a: Array, b: Array) -> tuple[Array, Array, Array, Array]:
     return offset, point, xi, ~before & ~after
 
 
-def squared_distance(x: Array, a: Array, b: Array) -> Array:
-    """f[]: ``|x - p|^2`` for the closest point ``p`` of segment ``a -> b`` to ``x``.
+def closeness(x: Array, a: Array, b: Array) -> tuple[Array, Array]:
+    """``(|x - p|^2, (x - p) . n)``: what the search ranks segments by.
 
-    The same number as ``project(x, a, b).distance_squared``, at lower cost.
+    The squared distance decides; where two segments tie exactly (a slave
+    whose closest point is the vertex they share), the larger signed normal
+    distance ``(x - p) . n`` does. At a convex corner that picks the face the
+    slave is outside of, so the gap's sign says outside; at a concave corner
+    both are negative and the sign says inside. (Ties to the lower index
+    alone, as API.md says, would report slaves in the blind spot beyond a
+    sharp convex corner as penetrating.) The same numbers as ``project``'s.
     """
     offset = _offset(x, a, b)[0]
-    return dot(offset, offset)
+    d = b - a
+    normal = safe_divide(jnp.stack([d[1], -d[0]]), safe_sqrt(dot(d, d)))
+    return dot(offset, offset), dot(offset, normal)
+
+
+def first_hit_time(x_prev: Array, x: Array, a: Array, b: Array) -> Array:
+    """f[]: ``path_hit``'s ``t``, or ``inf`` where the path misses the segment."""
+    hit = path_hit(x_prev, x, a, b)
+    return jnp.where(hit.hit, hit.t, jnp.inf)
 
 
 def project(x: Array, a: Array, b: Array) -> Projection:
@@ -156,31 +170,37 @@ def path_hit(x_prev: Array, x: Array, a: Array, b: Array) -> PathHit:
     side_b = cross(u, b - x_prev)
     meets_line = ((side_prev <= 0) & (side_now >= 0)) | ((side_prev >= 0) & (side_now <= 0))
     straddles = ((side_a <= 0) & (side_b >= 0)) | ((side_a >= 0) & (side_b <= 0))
-    transversal = side_prev != side_now
-    t_lines = safe_divide(side_prev, side_prev - side_now)
-    # Where the path's line runs exactly through an end point, the meeting
-    # point is that end point: t from it alone is the same number for both
-    # segments sharing it, so an exact tie at a shared vertex stays exact.
+    on_line = (side_prev == 0) & (side_now == 0)
+    # Each case's t is a ratio; the cases pick numerator and denominator and
+    # one division serves them all (the kernel's cost is in its divisions).
+    # Crossing the line: t from the path ends' sides. Where the path's line
+    # runs exactly through an end point, t from that point alone, which is the
+    # same number for both segments sharing it, so an exact tie stays exact.
+    numerator = side_prev
+    denominator = side_prev - side_now
     length_u = dot(u, u)
-    t_at_a = safe_divide(dot(a - x_prev, u), length_u)
-    t_at_b = safe_divide(dot(b - x_prev, u), length_u)
-    t_vertex = jnp.where(side_a == 0, t_at_a, jnp.where(side_b == 0, t_at_b, t_lines))
-    t_inner = jnp.where(side_prev == 0, 0, jnp.where(side_now == 0, 1, t_vertex))
-    t_transversal = jnp.clip(t_inner, 0, 1).astype(x.dtype)
-    hit_transversal = transversal & meets_line & straddles
-
-    # Both path ends on the segment's line (collinear or zero motion): track the
-    # segment coordinate s along the path and find the first t with s in [0, 1].
-    length_squared = dot(d, d)
-    s_prev = safe_divide(dot(x_prev - a, d), length_squared)
-    s_now = safe_divide(dot(x - a, d), length_squared)
-    starts_inside = (s_prev >= 0) & (s_prev <= 1)
-    entry = jnp.where(s_prev < 0, 0, 1).astype(x.dtype)
-    t_entry = safe_divide(entry - s_prev, s_now - s_prev, fallback=2)
-    t_collinear = jnp.where(starts_inside, 0, t_entry)
-    on_line = (side_prev == 0) & (side_now == 0) & (length_squared > 0)
-    hit_collinear = on_line & (t_collinear >= 0) & (t_collinear <= 1)
-
+    through_b, through_a = side_b == 0, side_a == 0
+    numerator = jnp.where(through_b, dot(b - x_prev, u), numerator)
+    denominator = jnp.where(through_b, length_u, denominator)
+    numerator = jnp.where(through_a, dot(a - x_prev, u), numerator)
+    denominator = jnp.where(through_a, length_u, denominator)
+    # Along the segment's own line (collinear, or no motion on it): the
+    # projections p = (y - a).d of the path's ends; the segment is p in [0, d.d].
+    length_d = dot(d, d)
+    along_prev = dot(x_prev - a, d)
+    along_now = dot(x - a, d)
+    starts_inside = (along_prev >= 0) & (along_prev <= length_d)
+    entry = jnp.where(along_prev < 0, 0, length_d)
+    numerator = jnp.where(on_line, jnp.where(starts_inside, 0, entry - along_prev), numerator)
+    denominator = jnp.where(
+        on_line, jnp.where(starts_inside, 1, along_now - along_prev), denominator
+    )
+    ratio = safe_divide(numerator, denominator, fallback=2)
+    # A path that starts or ends on the segment's line does so exactly at 0 or 1.
+    t = jnp.where(side_prev == 0, 0, jnp.where(side_now == 0, 1, ratio))
+    t = jnp.where(on_line, ratio, t)
+    hit_transversal = (side_prev != side_now) & meets_line & straddles
+    hit_collinear = on_line & (length_d > 0) & (ratio >= 0) & (ratio <= 1)
     hit = jnp.where(on_line, hit_collinear, hit_transversal)
-    t = jnp.where(on_line, t_collinear, t_transversal)
+    t = jnp.clip(t, 0, 1).astype(x.dtype)
     return PathHit(hit, jnp.where(hit, t, 0))

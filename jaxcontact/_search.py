@@ -15,8 +15,12 @@ _UNROLL = 32
 _BLOCK = 8
 
 
-def lowest_score(score, num_steps: int, num_rows: int, dtype, *, ordered: bool = False) -> Array:
-    """i32[N]: per row, the segment with the smallest score; ties to the lower segment.
+def lowest_score(score, num_steps: int, num_rows: int, dtype, *, unroll: int = _UNROLL) -> Array:
+    """i32[N]: per row, the segment with the smallest score.
+
+    Exact ties go to the larger ``side`` where the score gives one, then to the
+    segment met first; every caller meets each row's segments in increasing
+    index order, so that is the lower index.
 
     A running minimum over ``num_steps`` calls of ``score``: O(N) memory and
     one fused pass over the rows per step (an (N, M) plane reduced along M, or
@@ -24,40 +28,43 @@ def lowest_score(score, num_steps: int, num_rows: int, dtype, *, ordered: bool =
     blocks inside a ``lax.scan``, so compile time stays flat as steps grow.
 
     Args:
-      score: ``score(step) -> (value f[N], segment i32[N])`` for a traced
-        step index; ``value = inf`` marks no candidate.
+      score: ``score(step) -> (value f[N], segment i32[N], side f[N] or None)``
+        for a traced step index; ``value = inf`` marks no candidate.
       num_steps: how many steps to visit.
       num_rows: N.
       dtype: the values' dtype.
-      ordered: each row meets its segments in increasing order, so a strict
-        ``<`` keeps the lower of equal values and the index test is skipped.
+      unroll: at most this many steps run unrolled in one pass; more run in
+        a ``lax.scan`` over blocks of ``_BLOCK``.
 
     Returns:
       The winning segment per row, ``-1`` where every value is ``inf``.
     """
-    best = jnp.full((num_rows,), jnp.inf, dtype)
     choice = jnp.full((num_rows,), -1, jnp.int32)
     if num_steps == 0 or num_rows == 0:
         return choice
-    block = num_steps if num_steps <= _UNROLL else _BLOCK
+    best = jnp.full((num_rows,), jnp.inf, dtype)
+    best_side = jnp.full((num_rows,), -jnp.inf, dtype)
+    block = num_steps if num_steps <= unroll else _BLOCK
     num_blocks = -(-num_steps // block)
 
     def visit_block(carry, first):
-        best, choice = carry
+        best, best_side, choice = carry
         for offset in range(block):
             step = first + offset
-            value, segment = score(jnp.minimum(step, num_steps - 1))
+            value, segment, side = score(jnp.minimum(step, num_steps - 1))
             value = jnp.where(step < num_steps, value, jnp.inf)
             better = value < best
-            if not ordered:
-                better = better | ((value == best) & (segment < choice) & (value < jnp.inf))
+            if side is not None:
+                better = better | ((value == best) & (value < jnp.inf) & (side > best_side))
+                best_side = jnp.where(better, side, best_side)
             best = jnp.where(better, value, best)
             choice = jnp.where(better, segment, choice)
-        return (best, choice), None
+        return (best, best_side, choice), None
 
     firsts = jnp.arange(num_blocks, dtype=jnp.int32) * block
+    carry = (best, best_side, choice)
     if num_blocks == 1:
-        (_, choice), _ = visit_block((best, choice), firsts[0])
+        carry, _ = visit_block(carry, firsts[0])
     else:
-        (_, choice), _ = jax.lax.scan(visit_block, (best, choice), firsts)
-    return choice
+        carry, _ = jax.lax.scan(visit_block, carry, firsts)
+    return carry[2]

@@ -115,10 +115,19 @@ def oracle_contact(x, nodes, segments, seg_mask=None, slave_mask=None, radius=0.
         if not _is_on(slave_mask, i) or not real:
             continue  # masked: the row may be padding (NaN, inf), never read
         slave = _exact(row)
-        # min() keeps the first of equal keys: an exact tie goes to the lower index.
+
+        # Nearest first; of exactly equal distances (a shared vertex), the one
+        # with the larger signed normal distance (x - p) . n (README: ties),
+        # compared exactly through the monotone s |s| of s = (x - p) . n |d|,
+        # over |d|^2; min() keeps the first of equal keys: then the lower index.
+        def rank(candidate, slave=slave):
+            (_, a, b), (distance_squared, _, _, point) = candidate
+            d = _sub(b, a)
+            side = _cross(_sub(slave, point), d)
+            return distance_squared, -side * abs(side) / _dot(d, d)
+
         (k, a, b), (distance_squared, xi_free, xi, point) = min(
-            ((segment, closest_point(slave, *segment[1:])) for segment in real),
-            key=lambda candidate: candidate[1][0],
+            ((segment, closest_point(slave, *segment[1:])) for segment in real), key=rank
         )
         if distance_squared > radius_squared:
             continue

@@ -7,6 +7,7 @@ import pytest
 
 import jaxcontact
 from jaxcontact import Surface
+from jaxcontact.scenes import paper_scene
 from tests import helpers
 from tests.oracle import oracle_contact
 
@@ -97,14 +98,50 @@ def check_ties_at_random_shared_vertices(dtype, place):
     return found
 
 
+def off_bisector(vertex, previous, following, distance=0.1, share=0.3):
+    """f64[2]: a point ``distance`` from ``vertex`` in its blind spot (the closest
+    point on both segments is the vertex), off the corner's bisector: the edge
+    directions of the blind spot are the two segments' perpendiculars, and this
+    mixes them ``share : 1 - share``."""
+    vertex, previous, following = (np.asarray(p, np.float64) for p in (vertex, previous, following))
+    back = (previous - vertex) / np.linalg.norm(previous - vertex)
+    ahead = (following - vertex) / np.linalg.norm(following - vertex)
+    edge_back = np.array([back[1], -back[0]])
+    edge_back *= -1 if edge_back @ ahead > 0 else 1
+    edge_ahead = np.array([ahead[1], -ahead[0]])
+    edge_ahead *= -1 if edge_ahead @ back > 0 else 1
+    away = share * edge_back + (1 - share) * edge_ahead
+    return vertex + distance * away / np.linalg.norm(away)
+
+
 @DTYPES
-def test_slaves_in_blind_spots_of_random_outlines_tie_to_lower_index(dtype):
+@pytest.mark.parametrize("share", [0.3, 0.7])
+def test_slaves_in_blind_spots_tie_to_the_face_they_are_outside_of(dtype, share):
     # In the blind spot beside a shared vertex both segments' closest point is
-    # the vertex itself: an exact tie whatever the (non-dyadic) coordinates.
+    # the vertex itself: an exact tie in distance whatever the (non-dyadic)
+    # coordinates. The larger signed normal distance decides (README: ties),
+    # off the bisector by a clear margin, so the oracle's exact choice holds.
     def beside(vertex, previous, following):
-        return helpers.blind_spot(vertex, previous, following, 0.1)
+        return off_bisector(vertex, previous, following, share=share)
 
     assert check_ties_at_random_shared_vertices(dtype, beside) >= 6
+
+
+@DTYPES
+def test_slave_on_the_bisector_beyond_a_sharp_convex_corner_is_outside(dtype):
+    # The paper's tool tip: rake face R -> T, clearance face T -> C, an 81 degree
+    # wedge. Below the tip, in its blind spot, a slave is outside the tool; with
+    # ties to the lower index alone its gap would take the rake face's sign and
+    # say penetration. On the bisector the two faces tie exactly in reals.
+    tool = paper_scene(10, dtype=dtype).surface
+    nodes = np.asarray(tool.nodes, np.float64)
+    rake_end, tip, clearance_end = nodes
+    for share in (0.0, 0.5, 0.9, 1.0):
+        slave = off_bisector(tip, rake_end, clearance_end, distance=0.5, share=share)
+        contact = all_to_all(jnp.asarray([slave], dtype), tool, radius=1.0)
+        assert bool(contact.found[0]) and not bool(contact.active[0])
+        np.testing.assert_allclose(contact.gap[0], 0.5, rtol=1e-5)
+        np.testing.assert_allclose(contact.point[0], tip, rtol=1e-6)
 
 
 # Regression (found by this suite): a slave exactly on the vertex V shared by
@@ -150,8 +187,9 @@ def test_slave_on_shared_vertex_goes_to_lower_index(dtype):
 
 
 @DTYPES
-def test_blind_spot_outside_convex_corner_ties_to_lower_index_at_corner_distance(dtype):
-    # Outside the corner both segments' closest point is the vertex; the
+def test_blind_spot_outside_convex_corner_picks_the_face_with_larger_normal_distance(dtype):
+    # Outside the corner both segments' closest point is the vertex (a tie in
+    # distance; the larger (x - p) . n decides, here the first face); the
     # distance 0.625 = |(0.375, 0.5)| is exact, and the gap is positive.
     contact = checked_contact(
         [[1.375, -0.5], [-0.375, -0.5], [1.5, 1.375]],

@@ -1,0 +1,91 @@
+"""Wall-clock timing of JAX calls, shared by the command line and the benchmarks.
+
+JAX dispatches asynchronously, so a call returns before its result exists;
+every timed call here ends with ``jax.block_until_ready``. Compilation is
+timed apart from the runs, and the runs are summarised by their median and
+10th/90th percentiles rather than a mean, which one slow outlier would skew.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from typing import NamedTuple
+
+import jax
+import numpy as np
+
+
+class Timing(NamedTuple):
+    """How long one function took, in seconds."""
+
+    compile_s: float  # tracing and compiling (for a plain function: its first call)
+    median_s: float  # median of the timed runs
+    p10_s: float  # 10th percentile of the timed runs
+    p90_s: float  # 90th percentile of the timed runs
+    runs: int  # number of timed runs
+
+
+def _elapsed(call, args) -> float:
+    start = time.perf_counter()
+    jax.block_until_ready(call(*args))
+    return time.perf_counter() - start
+
+
+def time_call(fn, *args, repeats: int = 20, warmup: int = 2) -> Timing:
+    """Times ``fn(*args)``: compilation once, then ``repeats`` runs after a warm-up.
+
+    A ``jax.jit``-wrapped ``fn`` is compiled ahead of time with
+    ``fn.lower(*args).compile()`` and the compiled executable is what runs, so
+    ``compile_s`` is compilation alone. Any other ``fn`` is called once and
+    that first call, which for a jitted body includes one run, is
+    ``compile_s``. Time a jitted function before its first call elsewhere:
+    once it has run, JAX's cache holds its executable and ``compile_s`` only
+    measures the look-up.
+
+    Args:
+      fn: the function; pass keyword arguments with ``functools.partial``.
+      *args: its positional arguments (arrays or pytrees of arrays).
+      repeats: timed runs, at least 1.
+      warmup: untimed runs before them, to settle caches and thread pools.
+
+    Returns:
+      A ``Timing``.
+
+    Example:
+      >>> import jax, jax.numpy as jnp
+      >>> timing = time_call(jax.jit(jnp.sin), jnp.zeros(4), repeats=3)
+      >>> timing.runs, timing.p10_s <= timing.median_s <= timing.p90_s
+      (3, True)
+    """
+    if repeats < 1:
+        raise ValueError(f"repeats must be at least 1; got {repeats}")
+    if hasattr(fn, "lower"):
+        start = time.perf_counter()
+        call = fn.lower(*args).compile()
+        compile_s = time.perf_counter() - start
+    else:
+        call = fn
+        compile_s = _elapsed(call, args)
+    for _ in range(warmup):
+        _elapsed(call, args)
+    runs = np.array([_elapsed(call, args) for _ in range(repeats)])
+    p10, median, p90 = np.percentile(runs, [10, 50, 90])
+    return Timing(float(compile_s), float(median), float(p10), float(p90), repeats)
+
+
+def pinned_note() -> str:
+    """One line saying which CPU cores this process may run on.
+
+    XLA's CPU backend spreads even small kernels over every core it may use,
+    so a figure means little without it: run under ``taskset -c 0`` to pin.
+    """
+    total = os.cpu_count()
+    try:
+        allowed = sorted(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux (macOS, Windows): no affinity to read
+        return f"CPU affinity unknown on this platform; {total} cores in the machine"
+    listed = ",".join(str(core) for core in allowed)
+    if len(allowed) == 1:
+        return f"pinned to core {listed} (1 of {total} cores)"
+    return f"not pinned: {len(allowed)} of {total} cores allowed ({listed})"
