@@ -33,7 +33,7 @@ from jaxcontact._broad import (
     enclosing,
     segment_boxes,
 )
-from jaxcontact._geometry import closeness, first_hit_time
+from jaxcontact._geometry import first_hit_time, squared_distance
 from jaxcontact._narrow import (
     broad_phase,
     choose,
@@ -106,7 +106,7 @@ def _contact_impl(x, surface, radius, mask, plan, found=None):
 
     def narrow(_):
         kept, ok = kept_rows(x, slave_ok, blocks)
-        pair_value = vmapped(closeness, kept)
+        pair_value = vmapped(squared_distance, kept)
         choice, cells_overflow = choose(kept, ok, segments, boxes, pair_value, plan, listed)
         part = contact_from_choice(kept, segments, choice, radius, cells_overflow, ok)
         return scatter_blocks(part, blocks, empty_contact(x, cells_overflow), plan.block_size)

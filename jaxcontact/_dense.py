@@ -12,7 +12,7 @@ import jax.numpy as jnp
 
 from jaxcontact import _inputs
 from jaxcontact._assemble import contact_from_choice, crossing_from_choice
-from jaxcontact._geometry import closeness, first_hit_time
+from jaxcontact._geometry import first_hit_time, squared_distance
 from jaxcontact._search import lowest_score
 from jaxcontact._types import Array, Contact, Crossing, Surface
 
@@ -56,12 +56,12 @@ def all_to_all(x: Array, surface: Surface, *, radius, mask: Array | None = None)
 def _all_to_all(x, surface, radius, mask):
     x, slave_ok = _inputs.sanitize_points(x, mask)
     segments = _inputs.resolve_segments(surface)
-    to_segment = jax.vmap(closeness, in_axes=(0, None, None))
+    to_segment = jax.vmap(squared_distance, in_axes=(0, None, None))
 
     def score(k):
-        value, side = to_segment(x, segments.start[k], segments.end[k])
+        value = to_segment(x, segments.start[k], segments.end[k])
         value = jnp.where(segments.ok[k], value, jnp.inf)
-        return value, jnp.broadcast_to(k, value.shape), side
+        return value, jnp.broadcast_to(k, value.shape)
 
     # Masked rows are dropped when assembling, not inside the search's loop
     # (a row mask fused into it made it 3-4x slower).
@@ -111,7 +111,7 @@ def _swept(x_prev, x, surface, mask):
         t = jnp.where(
             segments.ok[k], hit_time(x_prev, x, segments.start[k], segments.end[k]), jnp.inf
         )
-        return t, jnp.broadcast_to(k, t.shape), None
+        return t, jnp.broadcast_to(k, t.shape)
 
     choice = lowest_score(score, segments.ok.shape[0], x.shape[0], x.dtype)
     return crossing_from_choice(x_prev, x, segments, choice, jnp.zeros((), bool), slave_ok)

@@ -58,6 +58,7 @@ class Projection(NamedTuple):
     xi: Array  # f[]  clamped projection coordinate
     point: Array  # f[2]  closest point p
     normal: Array  # f[2]  outward unit normal (t_y, -t_x)
+    normal_distance: Array  # f[]  (x - p) . n, signed
 
 
 def _offset(x: Array, a: Array, b: Array) -> tuple[Array, Array, Array, Array]:
@@ -81,21 +82,18 @@ def _offset(x: Array, a: Array, b: Array) -> tuple[Array, Array, Array, Array]:
     return offset, point, xi, ~before & ~after
 
 
-def closeness(x: Array, a: Array, b: Array) -> tuple[Array, Array]:
-    """``(|x - p|^2, (x - p) . n)``: what the search ranks segments by.
-
-    The squared distance decides; where two segments tie exactly (a slave
-    whose closest point is the vertex they share), the larger signed normal
-    distance ``(x - p) . n`` does. At a convex corner that picks the face the
-    slave is outside of, so the gap's sign says outside; at a concave corner
-    both are negative and the sign says inside. (Ties to the lower index
-    alone, as API.md says, would report slaves in the blind spot beyond a
-    sharp convex corner as penetrating.) The same numbers as ``project``'s.
-    """
-    offset = _offset(x, a, b)[0]
+def closeness(x: Array, a: Array, b: Array) -> tuple[Array, Array, Array]:
+    """``(|x - p|^2, (x - p) . n, xi)``, as ``project`` computes them, for settling ties."""
+    offset, _, xi, _ = _offset(x, a, b)
     d = b - a
     normal = safe_divide(jnp.stack([d[1], -d[0]]), safe_sqrt(dot(d, d)))
-    return dot(offset, offset), dot(offset, normal)
+    return dot(offset, offset), dot(offset, normal), xi
+
+
+def squared_distance(x: Array, a: Array, b: Array) -> Array:
+    """f[]: ``|x - p|^2``, the number ``project(x, a, b).distance_squared`` holds."""
+    offset = _offset(x, a, b)[0]
+    return dot(offset, offset)
 
 
 def first_hit_time(x_prev: Array, x: Array, a: Array, b: Array) -> Array:
@@ -128,7 +126,7 @@ def project(x: Array, a: Array, b: Array) -> Projection:
     normal_offset = dot(offset, normal)
     corner_sign = jnp.where(normal_offset < 0, -1, 1).astype(x.dtype)
     gap = jnp.where(interior, normal_offset, corner_sign * safe_sqrt(distance_squared))
-    return Projection(distance_squared, gap, xi, point, normal)
+    return Projection(distance_squared, gap, xi, point, normal, normal_offset)
 
 
 class PathHit(NamedTuple):

@@ -102,6 +102,7 @@ class Segments(NamedTuple):
     start: Array  # f[M, 2]  a; zeros where not ok
     end: Array  # f[M, 2]  b; zeros where not ok
     ok: Array  # bool[M]  real, finite and of non-zero length
+    nodes: Array  # i32[M, 2]  the node indices of each segment's ends
 
 
 def resolve_segments(surface: Surface) -> Segments:
@@ -114,7 +115,8 @@ def resolve_segments(surface: Surface) -> Segments:
     end = jnp.where(ok[:, None], end, 0)
     length_squared = jnp.sum((end - start) ** 2, axis=-1)
     ok = ok & (length_squared > 0) & jnp.isfinite(length_squared)
-    return Segments(jnp.where(ok[:, None], start, 0), jnp.where(ok[:, None], end, 0), ok)
+    start, end = jnp.where(ok[:, None], start, 0), jnp.where(ok[:, None], end, 0)
+    return Segments(start, end, ok, surface.segments)
 
 
 def sanitize_points(points: Array, mask: Array | None) -> tuple[Array, Array]:

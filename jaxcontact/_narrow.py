@@ -75,9 +75,9 @@ def search_all(pair_value, segments: Segments, num_rows: int, dtype) -> Array:
     """i32[S]: each kept slave against every segment (for few segments)."""
 
     def score(k):
-        value, side = pair_value(segments.start[k], segments.end[k])
+        value = pair_value(segments.start[k], segments.end[k])
         value = jnp.where(segments.ok[k], value, jnp.inf)
-        return value, jnp.broadcast_to(k, value.shape), side
+        return value, jnp.broadcast_to(k, value.shape)
 
     # Rows are not masked here but where the result is assembled: any per-row
     # mask fused into this loop made it 3-4x slower (measured).
@@ -115,8 +115,8 @@ def search_listed(pair_value, segments: Segments, listed: Array, dtype) -> Array
     def score(slot):
         segment = listed[:, slot]
         index = jnp.maximum(segment, 0)
-        value, side = pair_value(segments.start[index], segments.end[index])
-        return jnp.where(segment >= 0, value, jnp.inf), segment, side
+        value = pair_value(segments.start[index], segments.end[index])
+        return jnp.where(segment >= 0, value, jnp.inf), segment
 
     # Each cell lists its segments in increasing order. Per-slot gathers make
     # the unrolled loop slow to compile and to run: scan blocks of 8 (measured
@@ -142,15 +142,12 @@ def choose(query: Array, ok: Array, segments: Segments, boxes: Box, pair_value, 
 def vmapped(kernel, *rows):
     """``pair_value(start, end)`` mapping ``kernel(*row, start, end)`` over rows.
 
-    ``kernel`` returns ``(value, side)`` (see ``closeness``) or a bare value,
-    which is returned with side ``None``. ``start``/``end`` are f[2] for all
-    rows or f[S, 2] per row.
+    ``start``/``end`` are f[2] for all rows or f[S, 2] per row.
     """
 
     def pair_value(start, end):
         axis = None if start.ndim == 1 else 0
-        result = jax.vmap(kernel, in_axes=(0,) * len(rows) + (axis, axis))(*rows, start, end)
-        return result if isinstance(result, tuple) else (result, None)
+        return jax.vmap(kernel, in_axes=(0,) * len(rows) + (axis, axis))(*rows, start, end)
 
     return pair_value
 

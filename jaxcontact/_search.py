@@ -18,9 +18,10 @@ _BLOCK = 8
 def lowest_score(score, num_steps: int, num_rows: int, dtype, *, unroll: int = _UNROLL) -> Array:
     """i32[N]: per row, the segment with the smallest score.
 
-    Exact ties go to the larger ``side`` where the score gives one, then to the
-    segment met first; every caller meets each row's segments in increasing
-    index order, so that is the lower index.
+    Exact ties go to the segment met first; every caller meets each row's
+    segments in increasing index order, so that is the lower index. (Carrying
+    a second key for ties through this loop made it 3.5x slower, measured;
+    see ``_assemble.prefer_outside`` for how vertex ties are settled.)
 
     A running minimum over ``num_steps`` calls of ``score``: O(N) memory and
     one fused pass over the rows per step (an (N, M) plane reduced along M, or
@@ -28,7 +29,7 @@ def lowest_score(score, num_steps: int, num_rows: int, dtype, *, unroll: int = _
     blocks inside a ``lax.scan``, so compile time stays flat as steps grow.
 
     Args:
-      score: ``score(step) -> (value f[N], segment i32[N], side f[N] or None)``
+      score: ``score(step) -> (value f[N], segment i32[N])``
         for a traced step index; ``value = inf`` marks no candidate.
       num_steps: how many steps to visit.
       num_rows: N.
@@ -43,28 +44,24 @@ def lowest_score(score, num_steps: int, num_rows: int, dtype, *, unroll: int = _
     if num_steps == 0 or num_rows == 0:
         return choice
     best = jnp.full((num_rows,), jnp.inf, dtype)
-    best_side = jnp.full((num_rows,), -jnp.inf, dtype)
     block = num_steps if num_steps <= unroll else _BLOCK
     num_blocks = -(-num_steps // block)
 
     def visit_block(carry, first):
-        best, best_side, choice = carry
+        best, choice = carry
         for offset in range(block):
             step = first + offset
-            value, segment, side = score(jnp.minimum(step, num_steps - 1))
+            value, segment = score(jnp.minimum(step, num_steps - 1))
             value = jnp.where(step < num_steps, value, jnp.inf)
             better = value < best
-            if side is not None:
-                better = better | ((value == best) & (value < jnp.inf) & (side > best_side))
-                best_side = jnp.where(better, side, best_side)
             best = jnp.where(better, value, best)
             choice = jnp.where(better, segment, choice)
-        return (best, best_side, choice), None
+        return (best, choice), None
 
     firsts = jnp.arange(num_blocks, dtype=jnp.int32) * block
-    carry = (best, best_side, choice)
+    carry = (best, choice)
     if num_blocks == 1:
         carry, _ = visit_block(carry, firsts[0])
     else:
         carry, _ = jax.lax.scan(visit_block, carry, firsts)
-    return carry[2]
+    return carry[1]
