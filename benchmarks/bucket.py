@@ -325,6 +325,7 @@ def main():
     parser.add_argument("--quick", action="store_true", help="small sizes, a smoke test")
     parser.add_argument("--repeats", type=int, default=30)
     parser.add_argument("--sections", default="cutting,die,paper,reuse")
+    parser.add_argument("--die-sizes", default="1e5:1e4,1e6:1e5", help="N:M pairs, comma separated")
     args = parser.parse_args()
     jax.config.update("jax_enable_x64", True)
     print(f"# bucket.py: jax {jax.__version__}, {pinned_note()}")
@@ -337,7 +338,10 @@ def main():
     if "cutting" in sections:
         cutting_section(2_000 if args.quick else 81_939, args.repeats, args.quick)
     if "die" in sections:
-        sizes = [(10**4, 10**3)] if args.quick else [(10**5, 10**4), (10**6, 10**5)]
+        pairs = [pair.split(":") for pair in args.die_sizes.split(",")]
+        sizes = (
+            [(10**4, 10**3)] if args.quick else [(int(float(n)), int(float(m))) for n, m in pairs]
+        )
         rough_die_section(sizes, args.repeats)
     if "paper" in sections:
         paper_section(30 if args.quick else 286, args.repeats)

@@ -33,6 +33,7 @@ from jaxcontact._broad import (
     enclosing,
     segment_boxes,
 )
+from jaxcontact._cells import CellLists
 from jaxcontact._geometry import first_hit_time, squared_distance
 from jaxcontact._narrow import (
     broad_phase,
@@ -72,7 +73,7 @@ class Candidates(NamedTuple):
     """
 
     blocks: Blocks  # the kept blocks of slaves
-    listed: Array | None  # i32[S, C]  each kept slave's segments (cell plans), else None
+    listed: CellLists | None  # each kept slave's cell's segments (cell plans), else None
     reference: Array  # f[N, 2]  slave positions when found
     nodes: Array  # f[P, 2]  master node positions when found
     skin: Array  # f[]  the extra reach

@@ -93,19 +93,26 @@ def bin_segments(
     return Bins(order, start.astype(jnp.int32), count.astype(jnp.int32), too_wide | too_full)
 
 
-def candidates(cells: Array, bins: Bins, capacity: int) -> Array:
-    """i32[S, capacity]: the segments registered in each point's cell, -1 padded.
+class CellLists(NamedTuple):
+    """Each query point's candidate segments, as a slice of the sorted entries.
 
-    Args:
-      cells: i32[S] flat cell of each query point (the "no cell" number for
-        points that should see nothing).
-      bins: the binned segments.
-      capacity: static slots per cell.
+    O(S + E) memory: the (S, capacity) table of candidates is never built;
+    ``segment_in_slot`` reads one column of it at a time.
     """
-    slot = jnp.arange(capacity, dtype=jnp.int32)[None, :]
-    entry = bins.start[cells][:, None] + slot
-    present = slot < bins.count[cells][:, None]
-    last = max(bins.order.shape[0] - 1, 0)
-    if bins.order.shape[0] == 0:
-        return jnp.full(entry.shape, -1, jnp.int32)
-    return jnp.where(present, bins.order[jnp.minimum(entry, last)], -1)
+
+    first: Array  # i32[S]  first entry of the point's cell
+    count: Array  # i32[S]  entries in it (0 for a point that should see none)
+    order: Array  # i32[E]  segment of each sorted entry
+
+
+def cell_lists(cells: Array, bins: Bins) -> CellLists:
+    """The candidate lists of points in cells ``cells`` (i32[S], "no cell" sees none)."""
+    return CellLists(bins.start[cells], bins.count[cells], bins.order)
+
+
+def segment_in_slot(lists: CellLists, slot) -> Array:
+    """i32[S]: each point's ``slot``-th candidate segment, -1 past the end of its list."""
+    if lists.order.shape[0] == 0:
+        return jnp.full(lists.first.shape, -1, jnp.int32)
+    entry = jnp.minimum(lists.first + slot, lists.order.shape[0] - 1)
+    return jnp.where(slot < lists.count, lists.order[entry], -1)

@@ -19,7 +19,15 @@ from jaxcontact._broad import (
     enclosing,
     segment_boxes,
 )
-from jaxcontact._cells import Grid, bin_segments, candidates, cell_of, flat_cell
+from jaxcontact._cells import (
+    CellLists,
+    Grid,
+    bin_segments,
+    cell_lists,
+    cell_of,
+    flat_cell,
+    segment_in_slot,
+)
 from jaxcontact._inputs import Segments
 from jaxcontact._plan import BucketPlan
 from jaxcontact._search import lowest_score
@@ -85,7 +93,7 @@ def search_all(pair_value, segments: Segments, num_rows: int, dtype) -> Array:
 
 
 def list_candidates(query: Array, ok: Array, segments: Segments, boxes: Box, plan: BucketPlan):
-    """i32[S, C] the segments in each kept slave's cell (-1 padded), and the cells' overflow.
+    """The segments in each kept slave's cell (``CellLists``), and the cells' overflow.
 
     Args:
       query: f[S, 2] the point whose cell decides the candidates.
@@ -106,14 +114,14 @@ def list_candidates(query: Array, ok: Array, segments: Segments, boxes: Box, pla
     bins = bin_segments(boxes, segments.ok, grid, shape, plan.span, plan.cell_capacity)
     no_cell = shape[0] * shape[1]
     cells = jnp.where(ok, flat_cell(cell_of(query, grid, shape), shape), no_cell)
-    return candidates(cells, bins, plan.cell_capacity), bins.overflow
+    return cell_lists(cells, bins), bins.overflow
 
 
-def search_listed(pair_value, segments: Segments, listed: Array, dtype) -> Array:
-    """i32[S]: each kept slave against its listed segments (i32[S, C], -1 padded)."""
+def search_listed(pair_value, segments: Segments, listed: CellLists, capacity: int, dtype):
+    """i32[S]: each kept slave against the segments of its cell, ``capacity`` slots."""
 
     def score(slot):
-        segment = listed[:, slot]
+        segment = segment_in_slot(listed, slot)
         index = jnp.maximum(segment, 0)
         value = pair_value(segments.start[index], segments.end[index])
         return jnp.where(segment >= 0, value, jnp.inf), segment
@@ -121,8 +129,7 @@ def search_listed(pair_value, segments: Segments, listed: Array, dtype) -> Array
     # Each cell lists its segments in increasing order. Per-slot gathers make
     # the unrolled loop slow to compile and to run: scan blocks of 8 (measured
     # 3x faster to compile and 1.3-1.7x faster to run on the cutting scene).
-    num_slots, num_rows = listed.shape[1], listed.shape[0]
-    return lowest_score(score, num_slots, num_rows, dtype, unroll=8)
+    return lowest_score(score, capacity, listed.first.shape[0], dtype, unroll=8)
 
 
 def choose(query: Array, ok: Array, segments: Segments, boxes: Box, pair_value, plan, listed=None):
@@ -136,7 +143,7 @@ def choose(query: Array, ok: Array, segments: Segments, boxes: Box, pair_value, 
     overflow = jnp.zeros((), bool)
     if listed is None:
         listed, overflow = list_candidates(query, ok, segments, boxes, plan)
-    return search_listed(pair_value, segments, listed, query.dtype), overflow
+    return search_listed(pair_value, segments, listed, plan.cell_capacity, query.dtype), overflow
 
 
 def vmapped(kernel, *rows):
