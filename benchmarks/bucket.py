@@ -175,7 +175,7 @@ def cutting_section(num_nodes, repeats, quick):
             mismatches(numpy_box_then_dense(x, start, end, radius), reference),
             dense_ms,
         )
-        block_sizes = (128,) if quick else (32, 64, 128, 256)
+        block_sizes = (64,) if quick else (32, 64, 128, 256)
         for block_size in block_sizes:
             for use_cells in (False, True) if block_size == 64 else (False,):
                 plan = plan_buckets(

@@ -79,7 +79,7 @@ def plan_buckets(
     x_prev: Array | None = None,
     mask: Array | None = None,
     slack: float = 1.5,
-    block_size: int = 128,
+    block_size: int = 64,
     use_cells: bool | None = None,
     cell_factor: float = 1.0,
 ) -> BucketPlan:

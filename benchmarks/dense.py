@@ -1,0 +1,195 @@
+"""Benchmark of the dense detectors, ``all_to_all`` and ``swept``, against naive baselines.
+
+Scenes (SCENES.md): the paper scene, Test 1 (face length 10, d = 5) at
+n = 250 (63,001 nodes) and n = 286 (82,369 nodes), and the cutting scene at
+81,939 nodes with the tool tip at x = 18 (``all_to_all`` only: nothing moves).
+All in float32, on the CPU.
+
+Each call is timed by ``jaxcontact._timing.time_call``: compilation apart, two
+warm-up runs, then the median and p10/p90 of ``--repeats`` runs. In the same
+process, the same textbook brute force answers the same query twice:
+
+- with NumPy: every slave-segment pair at once in (N, M) arrays, ``argmin``
+  over M;
+- with JAX, jitted: the same code on ``jax.numpy``, so an (N, M) plane and
+  ``jnp.argmin``. It shows what the library's running minimum over segments
+  (O(N) memory, one fused pass over the slaves per segment) buys over the
+  plane a first version would build.
+
+Each baseline's answer is compared with the library's in the ``result``
+column. They differ only where the closest point is a vertex shared by two
+segments: the library gives the tie to the face the slave is outside of, the
+brute force to whichever its rounding makes closer.
+
+Usage:
+  python benchmarks/dense.py                # the sizes above
+  python benchmarks/dense.py --quick        # small sizes, a smoke test
+  taskset -c 0 python benchmarks/dense.py   # pinned to one core
+"""
+
+from __future__ import annotations
+
+import argparse
+import functools
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxcontact import all_to_all, swept
+from jaxcontact._timing import pinned_note, time_call
+from jaxcontact.scenes import cutting_scene, paper_scene
+
+
+def cross(u, v):
+    """z-component of the cross product of 2D vectors along the last axis."""
+    return u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]
+
+
+def brute_closest(xp, x, start, end, radius):
+    """Textbook brute force: ``(segment, gap, found)`` of every slave.
+
+    Args:
+      xp: the array module, ``numpy`` or ``jax.numpy``.
+      x: f[N, 2] slaves.
+      start: f[M, 2] segment starts.
+      end: f[M, 2] segment ends (no segment of zero length).
+      radius: search radius.
+    """
+    direction = end - start  # f[M, 2]
+    relative = x[:, None, :] - start  # f[N, M, 2]
+    length_squared = xp.sum(direction * direction, axis=-1)
+    xi = xp.clip(xp.sum(relative * direction, axis=-1) / length_squared, 0, 1)
+    offset = relative - xi[..., None] * direction
+    distance_squared = xp.sum(offset * offset, axis=-1)  # f[N, M]
+    segment = xp.argmin(distance_squared, axis=1)
+    rows = xp.arange(x.shape[0])
+    normal = xp.stack([direction[:, 1], -direction[:, 0]], axis=-1)[segment]
+    distance = xp.sqrt(distance_squared[rows, segment])
+    gap = xp.where(xp.sum(offset[rows, segment] * normal, axis=-1) < 0, -distance, distance)
+    found = distance <= radius
+    return xp.where(found, segment, -1), gap, found
+
+
+def brute_crossing(xp, x_prev, x, start, end):
+    """Textbook brute force: ``(segment, t, crossed)`` of every path ``x_prev -> x``.
+
+    Solves ``x_prev + t u = a + s d`` for every pair; parallel pairs never hit.
+    """
+    motion = (x - x_prev)[:, None, :]  # f[N, 1, 2]
+    direction = end - start  # f[M, 2]
+    to_start = start - x_prev[:, None, :]  # f[N, M, 2]
+    denominator = cross(motion, direction)  # f[N, M]
+    parallel = denominator == 0
+    denominator = xp.where(parallel, 1, denominator)
+    t = cross(to_start, direction) / denominator
+    s = cross(to_start, motion) / denominator
+    hit = ~parallel & (t >= 0) & (t <= 1) & (s >= 0) & (s <= 1)
+    times = xp.where(hit, t, xp.inf)
+    segment = xp.argmin(times, axis=1)
+    first = xp.min(times, axis=1)
+    crossed = xp.isfinite(first)
+    return xp.where(crossed, segment, -1), xp.where(crossed, first, 0), crossed
+
+
+def _disagreement(library, baseline) -> str:
+    """How many rows differ between two ``(segment, value, flag)`` answers.
+
+    Segments and flags must match exactly; values (a gap or a time) only where
+    flagged, since elsewhere they mean nothing, and to float32 rounding, since
+    the baselines compute them by another formula.
+    """
+    segment, value, flag = (np.asarray(part) for part in library)
+    other_segment, other_value, other_flag = (np.asarray(part) for part in baseline)
+    close = np.isclose(value, other_value, rtol=1e-5, atol=1e-5)
+    count = int(np.sum((segment != other_segment) | (flag != other_flag) | (flag & ~close)))
+    if count == 0:
+        return "same answer"
+    return f"{count:,} row differs" if count == 1 else f"{count:,} rows differ"
+
+
+def _baselines(query, brute, library, args, repeats) -> list[tuple]:
+    """Times ``brute`` jitted on JAX and on NumPy; ``(query, method, timing, result)`` rows."""
+    plane = jax.jit(functools.partial(brute, jnp))
+    timing = time_call(plane, *args, repeats=repeats)
+    rows = [(query, "JAX (N, M) plane + argmin", timing, _disagreement(library, plane(*args)))]
+    dense = functools.partial(brute, np)
+    host_args = [np.asarray(arg) for arg in args]
+    # Nothing compiles: the first call's time is no compile time.
+    timing = time_call(dense, *host_args, repeats=repeats)._replace(compile_s=None)
+    rows.append(
+        (query, "NumPy dense brute force", timing, _disagreement(library, dense(*host_args)))
+    )
+    return rows
+
+
+def bench_scene(scene, with_swept: bool, repeats: int) -> list[tuple]:
+    """Times the library and the baselines on one scene; one row per (query, method)."""
+    nodes = np.asarray(scene.surface.nodes)
+    pairs = np.asarray(scene.surface.segments)
+    start, end = jnp.asarray(nodes[pairs[:, 0]]), jnp.asarray(nodes[pairs[:, 1]])
+
+    detect = jax.jit(functools.partial(all_to_all, radius=scene.radius))
+    timing = time_call(detect, scene.x, scene.surface, repeats=repeats)
+    contact = detect(scene.x, scene.surface)
+    summary = f"found {int(contact.found.sum()):,}, active {int(contact.active.sum()):,}"
+    rows = [("all_to_all", "jaxcontact (running min)", timing, summary)]
+    closest = functools.partial(brute_closest, radius=np.float32(scene.radius))
+    library = (contact.segment, contact.gap, contact.found)
+    rows += _baselines("all_to_all", closest, library, (scene.x, start, end), repeats)
+
+    if with_swept:
+        sweep = jax.jit(swept)
+        timing = time_call(sweep, scene.x_prev, scene.x, scene.surface, repeats=repeats)
+        crossing = sweep(scene.x_prev, scene.x, scene.surface)
+        summary = f"crossed {int(crossing.crossed.sum()):,}"
+        rows.append(("swept", "jaxcontact (running min)", timing, summary))
+        library = (crossing.segment, crossing.t, crossing.crossed)
+        args = (scene.x_prev, scene.x, start, end)
+        rows += _baselines("swept", brute_crossing, library, args, repeats)
+    return rows
+
+
+def _table(results: list[tuple]) -> str:
+    """The markdown table; ``× library`` is a method's median over the library's."""
+    lines = [
+        "| scene | nodes N | segments M | query | method | compile (s) | median (ms) "
+        "| p10–p90 (ms) | × library | result |",
+        "|---|---:|---:|---|---|---:|---:|---:|---:|---|",
+    ]
+    library_median = {}
+    for scene, n, m, query, method, timing, result in results:
+        library_median.setdefault((scene, query), timing.median_s)
+        compile_s = "—" if timing.compile_s is None else f"{timing.compile_s:.2f}"
+        lines.append(
+            f"| {scene} | {n:,} | {m} | {query} | {method} | {compile_s} "
+            f"| {timing.median_s * 1e3:.2f} | {timing.p10_s * 1e3:.2f}–{timing.p90_s * 1e3:.2f} "
+            f"| {timing.median_s / library_median[scene, query]:.1f} | {result} |"
+        )
+    return "\n".join(lines)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="small sizes, a smoke test")
+    parser.add_argument("--repeats", type=int, default=20, help="timed runs per call (>= 10)")
+    args = parser.parse_args()
+
+    paper_sizes, cutting_nodes = ((30, 99), 5_000) if args.quick else ((250, 286), 81_939)
+    scenes = [(f"paper, n={n}", paper_scene(n), True) for n in paper_sizes]
+    scenes.append(("cutting, x_tip=18", cutting_scene(cutting_nodes, 18.0), False))
+    results = []
+    for name, scene, with_swept in scenes:
+        size = (name, scene.x.shape[0], scene.surface.segments.shape[0])
+        results += [(*size, *row) for row in bench_scene(scene, with_swept, args.repeats)]
+
+    print(
+        f"jax {jax.__version__}, numpy {np.__version__}, {jax.devices()[0].device_kind}, "
+        f"float32; {pinned_note()}"
+    )
+    print(f"median of {args.repeats} runs after 2 warm-up runs\n")
+    print(_table(results))
+
+
+if __name__ == "__main__":
+    main()
