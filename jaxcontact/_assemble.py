@@ -37,8 +37,13 @@ def vertex_neighbours(segments: Segments) -> tuple[Array, Array]:
     O(M log M), by sorting the node indices: no M x M table.
     """
     index = jnp.arange(segments.nodes.shape[0], dtype=jnp.int32)
+    ok = segments.ok
+    # Segments that are not real (padding, masked, degenerate) match nothing,
+    # so padding can never change a real row: keys -1, wanted -2.
     starts, ends = segments.nodes[:, 0], segments.nodes[:, 1]
-    return _first_match(ends, starts, index), _first_match(starts, ends, index)
+    before = _first_match(jnp.where(ok, ends, -1), jnp.where(ok, starts, -2), index)
+    after = _first_match(jnp.where(ok, starts, -1), jnp.where(ok, ends, -2), index)
+    return before, after
 
 
 def _on_chosen(kernel, x: Array, segments: Segments, choice: Array):

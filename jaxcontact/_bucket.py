@@ -216,6 +216,11 @@ def bucket_sort(
             )
         plan = plan_buckets(x, surface, radius=radius, mask=mask)
     _check_plan(plan, x.shape[0], for_paths=False)
+    if candidates is not None and (candidates.listed is None) == plan.use_cells:
+        raise ValueError(
+            "candidates were found with a plan of another kind (cells on or off); "
+            "find them with the plan passed here"
+        )
     return _contact_jit(x, surface, radius, mask, plan=plan, found=candidates)
 
 
@@ -292,7 +297,10 @@ def bucket_swept(
     Returns:
       A ``Crossing`` equal to ``swept``'s whenever ``overflow`` is False.
     """
-    x_prev, _, _ = _inputs.check_paths(x_prev, x, mask)
+    x_prev = _inputs.check_points("x_prev", x_prev)
+    x = _inputs.check_points("x", x, x_prev.dtype)
+    _inputs.check_paths(x_prev, x, mask)  # validation only: rows are sanitised inside
+    mask = _inputs.check_mask("mask", mask, x.shape[0])
     surface = _inputs.check_surface(surface, x_prev.dtype)
     if plan is None:
         if _is_traced(x_prev, x, surface, mask):

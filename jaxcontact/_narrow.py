@@ -124,7 +124,9 @@ def search_listed(pair_value, segments: Segments, listed: CellLists, capacity: i
         segment = segment_in_slot(listed, slot)
         index = jnp.maximum(segment, 0)
         value = pair_value(segments.start[index], segments.end[index])
-        return jnp.where(segment >= 0, value, jnp.inf), segment
+        # Reused lists may name a segment masked or degenerate since.
+        listed_ok = (segment >= 0) & segments.ok[index]
+        return jnp.where(listed_ok, value, jnp.inf), segment
 
     # Each cell lists its segments in increasing order. Per-slot gathers make
     # the unrolled loop slow to compile and to run: scan blocks of 8 (measured

@@ -109,6 +109,8 @@ def plan_buckets(
         )
     if slack < 1:
         raise ValueError(f"slack must be >= 1; got {slack}")
+    if not cell_factor > 0:
+        raise ValueError(f"cell_factor must be > 0; got {cell_factor}")
     x = _inputs.check_points("x", x)
     mask = _inputs.check_mask("mask", mask, x.shape[0])
     surface = _inputs.check_surface(surface, x.dtype)
@@ -196,7 +198,9 @@ def replan(plan: BucketPlan, x: Array, surface: Surface, **kwargs) -> BucketPlan
     Call it when a result's ``overflow`` is True, then detect again (the new
     plan compiles once). Keyword arguments are those of ``plan_buckets``.
     """
-    fresh = plan_buckets(x, surface, block_size=plan.block_size, use_cells=plan.use_cells, **kwargs)
+    kwargs = {"block_size": plan.block_size, "use_cells": plan.use_cells, **kwargs}
+    fresh = plan_buckets(x, surface, **kwargs)
+    fresh = dataclasses.replace(fresh, use_cells=fresh.use_cells or plan.use_cells)
     if fresh.for_paths != plan.for_paths or not plan.use_cells:
         return dataclasses.replace(
             fresh, block_capacity=max(fresh.block_capacity, plan.block_capacity)

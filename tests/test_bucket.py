@@ -353,3 +353,52 @@ def test_expired_candidates_can_miss_contacts_which_is_why_the_check_exists():
     stale = bucket_sort(scene.x, moved, radius=0.1, plan=plan, candidates=near)
     fresh = all_to_all(scene.x, moved, radius=0.1)
     assert int(fresh.found.sum()) > int(stale.found.sum())
+
+
+# Regressions found in review.
+
+
+def test_bucket_swept_ignores_a_nan_previous_position_like_swept():
+    wall = Surface(jnp.asarray([[1.0, -1.0], [1.0, 1.0]]), jnp.asarray([[0, 1]], jnp.int32))
+    x_prev = jnp.asarray([[jnp.nan, 0.0], [0.0, 0.5]])
+    x = jnp.asarray([[4.0, 0.0], [4.0, 0.5]])
+    binned = bucket_swept(x_prev, x, wall)
+    np.testing.assert_array_equal(binned.crossed, [False, True])
+    np.testing.assert_array_equal(binned.crossed, swept(x_prev, x, wall).crossed)
+
+
+def test_reused_candidates_skip_a_segment_masked_since():
+    scene = rough_die_scene(2_000, 100, dtype=jnp.float64)
+    plan = plan_buckets(scene.x, scene.surface, radius=0.03, use_cells=True)
+    near = find_candidates(scene.x, scene.surface, radius=0.02, skin=0.01, plan=plan)
+    masked = scene.surface._replace(mask=jnp.arange(100) % 3 != 0)
+    reused = bucket_sort(scene.x, masked, radius=0.02, plan=plan, candidates=near)
+    assert_same_contact(reused, all_to_all(scene.x, masked, radius=0.02), 0.02)
+
+
+def test_a_masked_padding_segment_does_not_change_a_vertex_tie():
+    # A triangle, counter-clockwise; below-left of the corner (1, 0) a slave in
+    # its blind spot. A masked padding segment [1, 1] listed first must not
+    # change which face the slave gets.
+    nodes = jnp.asarray([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+    triangle = jnp.asarray([[0, 1], [1, 2], [2, 0]], jnp.int32)
+    slave = jnp.asarray([[1.3, -0.1]])
+    plain = all_to_all(slave, Surface(nodes, triangle), radius=1.0)
+    padded = Surface(
+        nodes,
+        jnp.concatenate([jnp.asarray([[1, 1]], jnp.int32), triangle]),
+        jnp.asarray([False, True, True, True]),
+    )
+    with_padding = all_to_all(slave, padded, radius=1.0)
+    np.testing.assert_array_equal(with_padding.segment, plain.segment + 1)
+    np.testing.assert_array_equal(with_padding.normal, plain.normal)
+    assert float(plain.gap[0]) > 0
+
+
+def test_plan_rejects_a_non_positive_cell_factor_and_replan_takes_keywords():
+    scene = rough_die_scene(2_000, 100)
+    with pytest.raises(ValueError, match="cell_factor"):
+        plan_buckets(scene.x, scene.surface, radius=0.02, cell_factor=0.0)
+    plan = plan_buckets(scene.x, scene.surface, radius=0.02)
+    bigger = replan(plan, scene.x, scene.surface, radius=0.02, slack=3.0, use_cells=True)
+    assert bigger.cell_capacity >= plan.cell_capacity
