@@ -158,8 +158,15 @@ _candidates_jit = jax.jit(_candidates_impl, static_argnames="plan")
 _crossing_jit = jax.jit(_crossing_impl, static_argnames="plan")
 
 
-def _is_traced(*values) -> bool:
-    return any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree.leaves(values))
+def _plan_or_made(plan, values, name: str, how: str, make) -> BucketPlan:
+    """``plan``, or one made now from concrete ``values``; under ``jit`` none can be."""
+    if plan is not None:
+        return plan
+    if any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree.leaves(values)):
+        raise ValueError(
+            f"{name} under jit needs plan={how} made outside jit (and passed as a static argument)"
+        )
+    return make()
 
 
 def bucket_sort(
@@ -208,13 +215,13 @@ def bucket_sort(
     mask = _inputs.check_mask("mask", mask, x.shape[0])
     surface = _inputs.check_surface(surface, x.dtype)
     radius = _inputs.check_radius(radius, x.dtype)
-    if plan is None:
-        if _is_traced(x, surface, radius, mask):
-            raise ValueError(
-                "bucket_sort under jit needs plan=plan_buckets(...) made outside jit "
-                "(and passed as a static argument)"
-            )
-        plan = plan_buckets(x, surface, radius=radius, mask=mask)
+    plan = _plan_or_made(
+        plan,
+        (x, surface, radius, mask),
+        "bucket_sort",
+        "plan_buckets(x, surface, radius=...)",
+        lambda: plan_buckets(x, surface, radius=radius, mask=mask),
+    )
     _check_plan(plan, x.shape[0], for_paths=False)
     if candidates is not None and (candidates.listed is None) == plan.use_cells:
         raise ValueError(
@@ -302,12 +309,12 @@ def bucket_swept(
     _inputs.check_paths(x_prev, x, mask)  # validation only: rows are sanitised inside
     mask = _inputs.check_mask("mask", mask, x.shape[0])
     surface = _inputs.check_surface(surface, x_prev.dtype)
-    if plan is None:
-        if _is_traced(x_prev, x, surface, mask):
-            raise ValueError(
-                "bucket_swept under jit needs plan=plan_buckets(x, surface, x_prev=x_prev) "
-                "made outside jit (and passed as a static argument)"
-            )
-        plan = plan_buckets(x, surface, x_prev=x_prev, mask=mask)
+    plan = _plan_or_made(
+        plan,
+        (x_prev, x, surface, mask),
+        "bucket_swept",
+        "plan_buckets(x, surface, x_prev=x_prev)",
+        lambda: plan_buckets(x, surface, x_prev=x_prev, mask=mask),
+    )
     _check_plan(plan, x_prev.shape[0], for_paths=True)
     return _crossing_jit(x_prev, x, surface, mask, plan=plan)
