@@ -71,9 +71,7 @@ def scatter_blocks(result, blocks: Blocks, empty, block_size: int):
         tail = full.shape[1:]
         padded = jnp.pad(full, ((0, pad),) + ((0, 0),) * len(tail))
         by_block = padded.reshape((num_blocks, block_size) + tail)
-        by_block = by_block.at[blocks.index].set(
-            part.reshape((-1, block_size) + tail), mode="drop"
-        )
+        by_block = by_block.at[blocks.index].set(part.reshape((-1, block_size) + tail), mode="drop")
         return by_block.reshape((num_blocks * block_size,) + tail)[:num_rows]
 
     return jax.tree.map(put, empty, result)
