@@ -67,9 +67,6 @@ def prefer_outside(x: Array, segments: Segments, choice: Array) -> Array:
     index = jnp.maximum(choice, 0)
     distance, side, xi = _on_chosen(closeness, x, segments, choice)
     other = jnp.where(xi == 1, after[index], jnp.where(xi == 0, before[index], -1))
-    # Computed once: XLA would otherwise fuse this kernel into the gathers that
-    # use ``other`` and recompute it per gathered element (measured 4x slower).
-    distance, side, other = jax.lax.optimization_barrier((distance, side, other))
     rival_distance, rival_side, _ = _on_chosen(closeness, x, segments, other)
     switch = (
         (choice >= 0)
