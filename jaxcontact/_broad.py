@@ -107,3 +107,14 @@ def cull_blocks(boxes: Box, target: Box, num_rows: int, block_size: int, capacit
     return Blocks(
         kept.astype(jnp.int32), rows.reshape(-1).astype(jnp.int32), count, count > capacity
     )
+
+
+def broad_phase(low, high, slave_ok, segments: Segments, reach, block_size: int, capacity: int):
+    """The segment boxes inflated by ``reach``, and the blocks of slave boxes that meet them.
+
+    ``low``/``high`` are f[N, 2] per-slave boxes: the slave itself, or its path.
+    """
+    boxes = segment_boxes(segments, conservative_margin(reach, segments.start, segments.end))
+    block = block_boxes(low, high, slave_ok, block_size)
+    blocks = cull_blocks(block, enclosing(boxes), low.shape[0], block_size, capacity)
+    return boxes, blocks

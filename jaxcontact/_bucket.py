@@ -25,18 +25,10 @@ import jax.numpy as jnp
 
 from jaxcontact import _inputs
 from jaxcontact._assemble import contact_from_choice, crossing_from_choice
-from jaxcontact._broad import (
-    Blocks,
-    block_boxes,
-    conservative_margin,
-    cull_blocks,
-    enclosing,
-    segment_boxes,
-)
+from jaxcontact._broad import Blocks, broad_phase, conservative_margin, segment_boxes
 from jaxcontact._cells import CellLists
 from jaxcontact._geometry import first_hit_time, squared_distance
 from jaxcontact._narrow import (
-    broad_phase,
     choose,
     empty_contact,
     empty_crossing,
@@ -83,7 +75,9 @@ class Candidates(NamedTuple):
 def _candidates_impl(x, surface, radius, skin, mask, plan):
     x, slave_ok = _inputs.sanitize_points(x, mask)
     segments = _inputs.resolve_segments(surface)
-    boxes, blocks = broad_phase(x, slave_ok, segments, radius + skin, plan)
+    boxes, blocks = broad_phase(
+        x, x, slave_ok, segments, radius + skin, plan.block_size, plan.block_capacity
+    )
     listed, overflow = None, blocks.overflow
     if plan.use_cells:
         kept, ok = kept_rows(x, slave_ok, blocks)
@@ -100,7 +94,9 @@ def _contact_impl(x, surface, radius, mask, plan, found=None):
     if num_rows == 0 or segments.ok.shape[0] == 0:
         return empty_contact(x, no_overflow)
     if found is None:
-        boxes, blocks = broad_phase(x, slave_ok, segments, radius, plan)
+        boxes, blocks = broad_phase(
+            x, x, slave_ok, segments, radius, plan.block_size, plan.block_capacity
+        )
         listed, overflow = None, blocks.overflow
     else:
         boxes, blocks, listed, overflow = None, found.blocks, found.listed, found.overflow
@@ -124,16 +120,10 @@ def _crossing_impl(x_prev, x, surface, mask, plan):
     if num_rows == 0 or segments.ok.shape[0] == 0:
         return empty_crossing(x, no_overflow)
     # A path meets a segment only if their boxes meet.
-    touching = segment_boxes(
-        segments, conservative_margin(jnp.zeros((), x.dtype), segments.start, segments.end)
-    )
     path_low, path_high = jnp.minimum(x_prev, x), jnp.maximum(x_prev, x)
-    blocks = cull_blocks(
-        block_boxes(path_low, path_high, slave_ok, plan.block_size),
-        enclosing(touching),
-        num_rows,
-        plan.block_size,
-        plan.block_capacity,
+    no_reach = jnp.zeros((), x.dtype)
+    _, blocks = broad_phase(
+        path_low, path_high, slave_ok, segments, no_reach, plan.block_size, plan.block_capacity
     )
 
     def narrow(_):
@@ -211,10 +201,7 @@ def bucket_sort(
       >>> bool((contact.segment == all_to_all(scene.x, scene.surface, radius=0.1).segment).all())
       True
     """
-    x = _inputs.check_points("x", x)
-    mask = _inputs.check_mask("mask", mask, x.shape[0])
-    surface = _inputs.check_surface(surface, x.dtype)
-    radius = _inputs.check_radius(radius, x.dtype)
+    x, surface, radius, mask = _inputs.check_contact_inputs(x, surface, radius, mask)
     plan = _plan_or_made(
         plan,
         (x, surface, radius, mask),
@@ -254,10 +241,7 @@ def find_candidates(
       >>> int(bucket_sort(moved, scene.surface, radius=0.1, plan=plan, candidates=near).found.sum())
       13
     """
-    x = _inputs.check_points("x", x)
-    mask = _inputs.check_mask("mask", mask, x.shape[0])
-    surface = _inputs.check_surface(surface, x.dtype)
-    radius = _inputs.check_radius(radius, x.dtype)
+    x, surface, radius, mask = _inputs.check_contact_inputs(x, surface, radius, mask)
     skin = _inputs.check_radius(skin, x.dtype)
     _check_plan(plan, x.shape[0], for_paths=False)
     return _candidates_jit(x, surface, radius, skin, mask, plan=plan)
@@ -304,10 +288,7 @@ def bucket_swept(
     Returns:
       A ``Crossing`` equal to ``swept``'s whenever ``overflow`` is False.
     """
-    x_prev = _inputs.check_points("x_prev", x_prev)
-    x = _inputs.check_points("x", x, x_prev.dtype)
-    _inputs.check_paths(x_prev, x, mask)  # validation only: rows are sanitised inside
-    mask = _inputs.check_mask("mask", mask, x.shape[0])
+    x_prev, x, mask = _inputs.check_path_inputs(x_prev, x, mask)
     surface = _inputs.check_surface(surface, x_prev.dtype)
     plan = _plan_or_made(
         plan,

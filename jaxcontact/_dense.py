@@ -43,10 +43,7 @@ def all_to_all(x: Array, surface: Surface, *, radius, mask: Array | None = None)
       >>> contact.gap.tolist(), contact.active.tolist(), contact.normal.tolist()
       ([0.25, -0.125], [False, True], [[0.0, 1.0], [0.0, 1.0]])
     """
-    x = _inputs.check_points("x", x)
-    mask = _inputs.check_mask("mask", mask, x.shape[0])
-    surface = _inputs.check_surface(surface, x.dtype)
-    radius = _inputs.check_radius(radius, x.dtype)
+    x, surface, radius, mask = _inputs.check_contact_inputs(x, surface, radius, mask)
     return _all_to_all(x, surface, radius, mask)
 
 
@@ -93,10 +90,7 @@ def swept(x_prev: Array, x: Array, surface: Surface, *, mask: Array | None = Non
       >>> crossing.crossed.tolist(), crossing.t.tolist(), crossing.point.tolist()
       ([True], [0.25], [[1.0, 1.0]])
     """
-    x_prev = _inputs.check_points("x_prev", x_prev)
-    x = _inputs.check_points("x", x, x_prev.dtype)
-    _inputs.check_paths(x_prev, x, mask)
-    mask = _inputs.check_mask("mask", mask, x.shape[0])
+    x_prev, x, mask = _inputs.check_path_inputs(x_prev, x, mask)
     surface = _inputs.check_surface(surface, x.dtype)
     return _swept(x_prev, x, surface, mask)
 

@@ -61,6 +61,12 @@ class Projection(NamedTuple):
     normal_distance: Array  # f[]  (x - p) . n, signed
 
 
+def unit_normal(a: Array, b: Array) -> Array:
+    """f[2]: the outward unit normal ``(t_y, -t_x)`` of ``a -> b`` (zero if degenerate)."""
+    d = b - a
+    return safe_divide(jnp.stack([d[1], -d[0]]), safe_sqrt(dot(d, d)))
+
+
 def _offset(x: Array, a: Array, b: Array) -> tuple[Array, Array, Array, Array]:
     """``(x - p, p, xi, interior)`` for the closest point ``p`` of ``a -> b`` to ``x``."""
     d = b - a
@@ -85,9 +91,7 @@ def _offset(x: Array, a: Array, b: Array) -> tuple[Array, Array, Array, Array]:
 def closeness(x: Array, a: Array, b: Array) -> tuple[Array, Array, Array]:
     """``(|x - p|^2, (x - p) . n, xi)``, as ``project`` computes them, for settling ties."""
     offset, _, xi, _ = _offset(x, a, b)
-    d = b - a
-    normal = safe_divide(jnp.stack([d[1], -d[0]]), safe_sqrt(dot(d, d)))
-    return dot(offset, offset), dot(offset, normal), xi
+    return dot(offset, offset), dot(offset, unit_normal(a, b)), xi
 
 
 def squared_distance(x: Array, a: Array, b: Array) -> Array:
@@ -120,9 +124,8 @@ def project(x: Array, a: Array, b: Array) -> Projection:
       A ``Projection`` of scalars and ``(2,)`` vectors.
     """
     offset, point, xi, interior = _offset(x, a, b)
-    d = b - a
     distance_squared = dot(offset, offset)
-    normal = safe_divide(jnp.stack([d[1], -d[0]]), safe_sqrt(dot(d, d)))
+    normal = unit_normal(a, b)
     normal_offset = dot(offset, normal)
     corner_sign = jnp.where(normal_offset < 0, -1, 1).astype(x.dtype)
     gap = jnp.where(interior, normal_offset, corner_sign * safe_sqrt(distance_squared))

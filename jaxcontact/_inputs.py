@@ -127,13 +127,25 @@ def sanitize_points(points: Array, mask: Array | None) -> tuple[Array, Array]:
     return jnp.where(ok[:, None], points, 0), ok
 
 
-def check_paths(x_prev, x, mask) -> tuple[Array, Array, Array]:
-    """Checks a pair of slave positions; returns both sanitised and bool[N] row ok."""
+def check_contact_inputs(x, surface: Surface, radius, mask):
+    """Checks the arguments of a closest-point detector; returns them as arrays."""
+    x = check_points("x", x)
+    mask = check_mask("mask", mask, x.shape[0])
+    return x, check_surface(surface, x.dtype), check_radius(radius, x.dtype), mask
+
+
+def check_path_inputs(x_prev, x, mask):
+    """Checks a pair of slave positions and their mask; returns them as arrays."""
     x_prev = check_points("x_prev", x_prev)
     x = check_points("x", x, x_prev.dtype)
     if x.shape != x_prev.shape:
         raise ValueError(f"x must have x_prev's shape {x_prev.shape}; got shape {x.shape}")
-    mask = check_mask("mask", mask, x.shape[0])
+    return x_prev, x, check_mask("mask", mask, x.shape[0])
+
+
+def check_paths(x_prev, x, mask) -> tuple[Array, Array, Array]:
+    """Checks a pair of slave positions; returns both sanitised and bool[N] row ok."""
+    x_prev, x, mask = check_path_inputs(x_prev, x, mask)
     _, prev_ok = sanitize_points(x_prev, mask)
     x, ok = sanitize_points(x, prev_ok)
     return jnp.where(ok[:, None], x_prev, 0), x, ok

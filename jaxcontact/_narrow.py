@@ -13,11 +13,7 @@ import jax.numpy as jnp
 from jaxcontact._broad import (
     Blocks,
     Box,
-    block_boxes,
-    conservative_margin,
-    cull_blocks,
     enclosing,
-    segment_boxes,
 )
 from jaxcontact._cells import (
     CellLists,
@@ -162,10 +158,3 @@ def vmapped(kernel, *rows):
 def kept_rows(x: Array, slave_ok: Array, blocks: Blocks):
     rows = jnp.minimum(blocks.rows, x.shape[0] - 1)
     return x[rows], slave_ok[rows] & (blocks.rows < x.shape[0])
-
-
-def broad_phase(x, slave_ok, segments, reach, plan):
-    boxes = segment_boxes(segments, conservative_margin(reach, segments.start, segments.end))
-    block = block_boxes(x, x, slave_ok, plan.block_size)
-    blocks = cull_blocks(block, enclosing(boxes), x.shape[0], plan.block_size, plan.block_capacity)
-    return boxes, blocks

@@ -18,13 +18,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxcontact import _inputs
-from jaxcontact._broad import (
-    block_boxes,
-    conservative_margin,
-    cull_blocks,
-    enclosing,
-    segment_boxes,
-)
+from jaxcontact._broad import broad_phase, conservative_margin, enclosing, segment_boxes
 from jaxcontact._cells import Grid, bin_segments
 from jaxcontact._types import Array, Surface
 
@@ -131,15 +125,8 @@ def plan_buckets(
     num_blocks = -(-num_rows // block_size)
     if num_rows == 0 or num_segments == 0:
         return BucketPlan(num_rows, block_size, 1, for_paths)
-    cull_boxes = segment_boxes(
-        segments, conservative_margin(cull_reach, segments.start, segments.end)
-    )
-    blocks = cull_blocks(
-        block_boxes(query_low, query_high, slave_ok, block_size),
-        enclosing(cull_boxes),
-        num_rows,
-        block_size,
-        num_blocks,
+    _, blocks = broad_phase(
+        query_low, query_high, slave_ok, segments, cull_reach, block_size, num_blocks
     )
     block_capacity = min(num_blocks, _grow(int(blocks.count), slack))
     if use_cells is None:
