@@ -12,7 +12,7 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
-from jaxcontact._geometry import closeness, path_hit, project
+from jaxcontact._geometry import dot, path_hit, project, unit_normal
 from jaxcontact._inputs import Segments
 from jaxcontact._types import Array, Contact, Crossing
 
@@ -64,18 +64,61 @@ def prefer_outside(x: Array, segments: Segments, choice: Array) -> Array:
     penetrating. Only neighbours that share the node index are seen.
     """
     before, after = vertex_neighbours(segments)
+    start, end = segments.start, segments.end
+    normal = jax.vmap(unit_normal)(start, end)
     index = jnp.maximum(choice, 0)
-    distance, side, xi = _on_chosen(closeness, x, segments, choice)
-    other = jnp.where(xi == 1, after[index], jnp.where(xi == 0, before[index], -1))
-    rival_distance, rival_side, _ = _on_chosen(closeness, x, segments, other)
-    switch = (
-        (choice >= 0)
-        & (other >= 0)
-        & segments.ok[jnp.maximum(other, 0)]
-        & (rival_distance == distance)
-        & (rival_side > side)
-    )
+    a, b = start[index], end[index]
+    d = b - a
+    # The sign tests ``_geometry._offset`` clamps by: the closest point is an end.
+    at_start = jax.vmap(dot)(x - a, d) <= 0
+    at_end = jax.vmap(dot)(x - b, d) >= 0
+    other = jnp.where(at_end, after[index], jnp.where(at_start, before[index], -1))
+    rival = jnp.maximum(other, 0)
+    # No distance test is needed: the neighbour contains v, so it is at most
+    # as far as v, and the search did not find it nearer, so the two tie up
+    # to rounding (the neighbour's own closest point may round 1e-16 inside
+    # it, where it ties exactly in reals). Both then measure from v.
+    offset = x - jnp.where(at_end[:, None], b, a)
+    outside = jax.vmap(dot)(offset, normal[rival]) > jax.vmap(dot)(offset, normal[index])
+    switch = (choice >= 0) & (other >= 0) & segments.ok[rival] & outside
     return jnp.where(switch, other, choice)
+
+
+def in_stages(go: Array, stages, skipped):
+    """Runs ``stages`` in turn, each on the last one's result, when ``go``.
+
+    Each stage is its own ``lax.cond`` on ``go``, returning ``skipped[i]``
+    when not. Besides skipping the work (no real row; no kept block), the
+    cond boundaries keep XLA from fusing a search loop into the gathers that
+    read its result: on the CPU it then re-ran the search per gathered value
+    (measured 5x slower on the cutting scene), and ``optimization_barrier``
+    does not stop that fusion there. Under ``vmap`` the conds become selects:
+    both branches run and the boundaries are lost.
+    """
+    value = None
+    for stage, empty in zip(stages, skipped, strict=True):
+        value = jax.lax.cond(go, stage, lambda _, empty=empty: empty, value)
+    return value
+
+
+def empty_contact(x: Array, overflow: Array) -> Contact:
+    zeros = jnp.zeros(x.shape[:1], x.dtype)
+    false = jnp.zeros(x.shape[:1], bool)
+    minus_one = jnp.full(x.shape[:1], -1, jnp.int32)
+    return Contact(
+        zeros, zeros, minus_one, jnp.zeros_like(x), jnp.zeros_like(x), false, false, overflow
+    )
+
+
+def empty_crossing(x: Array, overflow: Array) -> Crossing:
+    zeros = jnp.zeros(x.shape[:1], x.dtype)
+    return Crossing(
+        zeros,
+        jnp.full(x.shape[:1], -1, jnp.int32),
+        jnp.zeros_like(x),
+        jnp.zeros(x.shape[:1], bool),
+        overflow,
+    )
 
 
 def contact_from_choice(

@@ -24,14 +24,18 @@ import jax
 import jax.numpy as jnp
 
 from jaxcontact import _inputs
-from jaxcontact._assemble import contact_from_choice, crossing_from_choice
+from jaxcontact._assemble import (
+    contact_from_choice,
+    crossing_from_choice,
+    empty_contact,
+    empty_crossing,
+    in_stages,
+)
 from jaxcontact._broad import Blocks, broad_phase, conservative_margin, segment_boxes
 from jaxcontact._cells import CellLists
 from jaxcontact._geometry import first_hit_time, squared_distance
 from jaxcontact._narrow import (
     choose,
-    empty_contact,
-    empty_crossing,
     kept_rows,
     list_candidates,
     scatter_blocks,
@@ -73,7 +77,7 @@ class Candidates(NamedTuple):
 
 
 def _candidates_impl(x, surface, radius, skin, mask, plan):
-    x, slave_ok = _inputs.sanitize_points(x, mask)
+    slave_ok = _inputs.rows_ok(x, mask)
     segments = _inputs.resolve_segments(surface)
     boxes, blocks = broad_phase(
         x, x, slave_ok, segments, radius + skin, plan.block_size, plan.block_capacity
@@ -86,8 +90,34 @@ def _candidates_impl(x, surface, radius, skin, mask, plan):
     return Candidates(blocks, listed, x, surface.nodes, skin, overflow)
 
 
+def _search_kept(
+    x, query, ok, blocks, segments, boxes, pair_value, plan, listed, from_choice, empty
+):
+    """The narrow phase on the kept slaves and the rows written back: search,
+    assemble (``from_choice(choice, overflow)``), scatter, each skipped when
+    no block was kept (``_assemble.in_stages``). ``boxes()`` makes the
+    segment boxes the cells need; ``empty(rows, overflow)`` a not-found result.
+    """
+    no_overflow = jnp.zeros((), bool)
+
+    def search(_):
+        return choose(query, ok, segments, boxes(), pair_value, plan, listed)
+
+    def write(part):
+        return scatter_blocks(part, blocks, empty(x, part.overflow), plan.block_size)
+
+    no_choice = jnp.full(query.shape[:1], -1, jnp.int32), no_overflow
+    return in_stages(
+        blocks.count > 0,
+        [search, lambda found: from_choice(*found), write],
+        [no_choice, empty(query, no_overflow), empty(x, no_overflow)],
+    )
+
+
 def _contact_impl(x, surface, radius, mask, plan, found=None):
-    x, slave_ok = _inputs.sanitize_points(x, mask)
+    # Bad rows are left in ``x``: the box reductions skip them, and the kept
+    # rows are zeroed when gathered, so no pass over all N rows copies x.
+    slave_ok = _inputs.rows_ok(x, mask)
     segments = _inputs.resolve_segments(surface)
     num_rows = x.shape[0]
     no_overflow = jnp.zeros((), bool)
@@ -101,19 +131,21 @@ def _contact_impl(x, surface, radius, mask, plan, found=None):
     else:
         boxes, blocks, listed, overflow = None, found.blocks, found.listed, found.overflow
 
-    def narrow(_):
-        kept, ok = kept_rows(x, slave_ok, blocks)
-        pair_value = vmapped(squared_distance, kept)
-        choice, cells_overflow = choose(kept, ok, segments, boxes, pair_value, plan, listed)
-        part = contact_from_choice(kept, segments, choice, radius, cells_overflow, ok)
-        return scatter_blocks(part, blocks, empty_contact(x, cells_overflow), plan.block_size)
+    kept, ok = kept_rows(x, slave_ok, blocks)
 
-    result = jax.lax.cond(blocks.count > 0, narrow, lambda _: empty_contact(x, no_overflow), None)
+    def from_choice(choice, cells_overflow):
+        return contact_from_choice(kept, segments, choice, radius, cells_overflow, ok)
+
+    pair_value = vmapped(squared_distance, kept)
+    result = _search_kept(
+        x, kept, ok, blocks, segments, lambda: boxes, pair_value, plan, listed,
+        from_choice, empty_contact,
+    )  # fmt: skip
     return result._replace(overflow=result.overflow | overflow)
 
 
 def _crossing_impl(x_prev, x, surface, mask, plan):
-    x_prev, x, slave_ok = _inputs.check_paths(x_prev, x, mask)
+    slave_ok = _inputs.rows_ok(x, _inputs.rows_ok(x_prev, mask))
     segments = _inputs.resolve_segments(surface)
     num_rows = x.shape[0]
     no_overflow = jnp.zeros((), bool)
@@ -126,20 +158,24 @@ def _crossing_impl(x_prev, x, surface, mask, plan):
         path_low, path_high, slave_ok, segments, no_reach, plan.block_size, plan.block_capacity
     )
 
-    def narrow(_):
-        start, ok = kept_rows(x_prev, slave_ok, blocks)
-        end = x[jnp.minimum(blocks.rows, num_rows - 1)]
+    start, ok = kept_rows(x_prev, slave_ok, blocks)
+    end, _ = kept_rows(x, slave_ok, blocks)
+
+    def path_boxes():
         # Where a path meets a segment, its start lies within the path's length
         # of that segment: bin the segments inflated by the longest kept path
         # and look up each path's start (the paper's boxes inflated by d_max).
         longest = jnp.max(jnp.where(ok, jnp.max(jnp.abs(end - start), axis=-1), 0), initial=0)
-        boxes = segment_boxes(segments, conservative_margin(longest, segments.start, segments.end))
-        pair_value = vmapped(first_hit_time, start, end)
-        choice, overflow = choose(start, ok, segments, boxes, pair_value, plan)
-        part = crossing_from_choice(start, end, segments, choice, overflow, ok)
-        return scatter_blocks(part, blocks, empty_crossing(x, overflow), plan.block_size)
+        return segment_boxes(segments, conservative_margin(longest, segments.start, segments.end))
 
-    result = jax.lax.cond(blocks.count > 0, narrow, lambda _: empty_crossing(x, no_overflow), None)
+    def from_choice(choice, overflow):
+        return crossing_from_choice(start, end, segments, choice, overflow, ok)
+
+    pair_value = vmapped(first_hit_time, start, end)
+    result = _search_kept(
+        x, start, ok, blocks, segments, path_boxes, pair_value, plan, None,
+        from_choice, empty_crossing,
+    )  # fmt: skip
     return result._replace(overflow=result.overflow | blocks.overflow)
 
 

@@ -119,11 +119,15 @@ def resolve_segments(surface: Surface) -> Segments:
     return Segments(start, end, ok, surface.segments)
 
 
+def rows_ok(points: Array, mask: Array | None) -> Array:
+    """bool[N]: the row is finite and not masked out."""
+    ok = jnp.all(jnp.isfinite(points), axis=-1)
+    return ok if mask is None else ok & mask
+
+
 def sanitize_points(points: Array, mask: Array | None) -> tuple[Array, Array]:
     """Returns ``(points with bad rows zeroed, bool[N] row ok)``."""
-    ok = jnp.all(jnp.isfinite(points), axis=-1)
-    if mask is not None:
-        ok = ok & mask
+    ok = rows_ok(points, mask)
     return jnp.where(ok[:, None], points, 0), ok
 
 

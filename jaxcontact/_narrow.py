@@ -27,27 +27,7 @@ from jaxcontact._cells import (
 from jaxcontact._inputs import Segments
 from jaxcontact._plan import BucketPlan
 from jaxcontact._search import lowest_score
-from jaxcontact._types import Array, Contact, Crossing
-
-
-def empty_contact(x: Array, overflow: Array) -> Contact:
-    zeros = jnp.zeros(x.shape[:1], x.dtype)
-    false = jnp.zeros(x.shape[:1], bool)
-    minus_one = jnp.full(x.shape[:1], -1, jnp.int32)
-    return Contact(
-        zeros, zeros, minus_one, jnp.zeros_like(x), jnp.zeros_like(x), false, false, overflow
-    )
-
-
-def empty_crossing(x: Array, overflow: Array) -> Crossing:
-    zeros = jnp.zeros(x.shape[:1], x.dtype)
-    return Crossing(
-        zeros,
-        jnp.full(x.shape[:1], -1, jnp.int32),
-        jnp.zeros_like(x),
-        jnp.zeros(x.shape[:1], bool),
-        overflow,
-    )
+from jaxcontact._types import Array
 
 
 def scatter_blocks(result, blocks: Blocks, empty, block_size: int):
@@ -156,5 +136,7 @@ def vmapped(kernel, *rows):
 
 
 def kept_rows(x: Array, slave_ok: Array, blocks: Blocks):
+    """The kept slaves (f[S, 2], bad rows zeroed) and bool[S] which are real."""
     rows = jnp.minimum(blocks.rows, x.shape[0] - 1)
-    return x[rows], slave_ok[rows] & (blocks.rows < x.shape[0])
+    ok = slave_ok[rows] & (blocks.rows < x.shape[0])
+    return jnp.where(ok[:, None], x[rows], 0), ok
