@@ -12,14 +12,18 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
+from jaxcontact._cells import stable_order
 from jaxcontact._geometry import dot, path_hit, project, unit_normal
 from jaxcontact._inputs import Segments
 from jaxcontact._types import Array, Contact, Crossing
 
 
-def _first_match(keys: Array, wanted: Array, exclude: Array) -> Array:
-    """i32[M]: per k, the lowest j != exclude[k] with keys[j] == wanted[k], or -1."""
-    order = jnp.argsort(keys, stable=True)
+def _first_match(keys: Array, wanted: Array, exclude: Array, num_values: int) -> Array:
+    """i32[M]: per k, the lowest j != exclude[k] with keys[j] == wanted[k], or -1.
+
+    ``keys`` lie in ``[-1, num_values - 1)``.
+    """
+    order = stable_order(keys + 1, num_values)
     ordered = keys[order]
     last = keys.shape[0] - 1
     at = jnp.minimum(jnp.searchsorted(ordered, wanted), last)
@@ -41,8 +45,9 @@ def vertex_neighbours(segments: Segments) -> tuple[Array, Array]:
     # Segments that are not real (padding, masked, degenerate) match nothing,
     # so padding can never change a real row: keys -1, wanted -2.
     starts, ends = segments.nodes[:, 0], segments.nodes[:, 1]
-    before = _first_match(jnp.where(ok, ends, -1), jnp.where(ok, starts, -2), index)
-    after = _first_match(jnp.where(ok, starts, -1), jnp.where(ok, ends, -2), index)
+    num_values = segments.num_nodes + 1
+    before = _first_match(jnp.where(ok, ends, -1), jnp.where(ok, starts, -2), index, num_values)
+    after = _first_match(jnp.where(ok, starts, -1), jnp.where(ok, ends, -2), index, num_values)
     return before, after
 
 

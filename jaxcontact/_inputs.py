@@ -103,20 +103,25 @@ class Segments(NamedTuple):
     end: Array  # f[M, 2]  b; zeros where not ok
     ok: Array  # bool[M]  real, finite and of non-zero length
     nodes: Array  # i32[M, 2]  the node indices of each segment's ends
+    num_nodes: int  # P, static: ok segments' node indices lie in [0, P)
 
 
 def resolve_segments(surface: Surface) -> Segments:
     """End points of every segment; masked, non-finite or zero-length ones flagged."""
     start = surface.nodes[surface.segments[:, 0]]
     end = surface.nodes[surface.segments[:, 1]]
-    finite = jnp.all(jnp.isfinite(start) & jnp.isfinite(end), axis=-1)
+    num_nodes = surface.nodes.shape[0]
+    # Indices out of range (possible only under jit, where they cannot be
+    # checked) would be clamped by the gather: such segments are not real.
+    in_range = jnp.all((surface.segments >= 0) & (surface.segments < num_nodes), axis=-1)
+    finite = jnp.all(jnp.isfinite(start) & jnp.isfinite(end), axis=-1) & in_range
     ok = finite if surface.mask is None else finite & surface.mask
     start = jnp.where(ok[:, None], start, 0)
     end = jnp.where(ok[:, None], end, 0)
     length_squared = jnp.sum((end - start) ** 2, axis=-1)
     ok = ok & (length_squared > 0) & jnp.isfinite(length_squared)
     start, end = jnp.where(ok[:, None], start, 0), jnp.where(ok[:, None], end, 0)
-    return Segments(start, end, ok, surface.segments)
+    return Segments(start, end, ok, surface.segments, num_nodes)
 
 
 def rows_ok(points: Array, mask: Array | None) -> Array:

@@ -15,7 +15,9 @@ _UNROLL = 32
 _BLOCK = 8
 
 
-def lowest_score(score, num_steps: int, num_rows: int, dtype, *, unroll: int = _UNROLL) -> Array:
+def lowest_score(
+    score, num_steps: int, num_rows: int, dtype, *, unroll: int = _UNROLL, steps_needed=None
+) -> Array:
     """i32[N]: per row, the segment with the smallest score.
 
     Exact ties go to the segment met first; every caller meets each row's
@@ -37,6 +39,9 @@ def lowest_score(score, num_steps: int, num_rows: int, dtype, *, unroll: int = _
       dtype: the values' dtype.
       unroll: at most this many steps run unrolled in one pass; more run in
         a ``lax.scan`` over blocks of ``_BLOCK``.
+      steps_needed: optional traced count <= ``num_steps``; steps past it
+        score ``inf`` for every row, and whole blocks past it are skipped
+        (a ``lax.while_loop`` instead of the scan).
 
     Returns:
       The winning segment per row, ``-1`` where every value is ``inf``.
@@ -63,6 +68,16 @@ def lowest_score(score, num_steps: int, num_rows: int, dtype, *, unroll: int = _
     carry = (best, choice)
     if num_blocks == 1:
         carry, _ = visit_block(carry, firsts[0])
-    else:
+    elif steps_needed is None:
         carry, _ = jax.lax.scan(visit_block, carry, firsts)
+    else:
+        blocks_needed = jnp.minimum((steps_needed + block - 1) // block, num_blocks)
+
+        def step(state):
+            index, carry = state
+            return index + 1, visit_block(carry, index * block)[0]
+
+        _, carry = jax.lax.while_loop(
+            lambda state: state[0] < blocks_needed, step, (jnp.zeros((), jnp.int32), carry)
+        )
     return carry[1]

@@ -147,3 +147,20 @@ def test_bad_concrete_value_raises_naming_the_argument(case):
     name, call = BAD_VALUES[case]
     with pytest.raises(ValueError, match=rf"^{re.escape(name)}\b(?!\.)"):
         call()
+
+
+@pytest.mark.parametrize("bad", [[1, 3], [-1, 2], [7, -5]])
+def test_segment_index_out_of_range_under_jit_is_not_a_segment(bad):
+    # Under jit the indices cannot be checked; the gather would clamp them to
+    # real nodes and make up a segment. That segment is ignored instead, and
+    # the other rows are as without it.
+    segments = jnp.asarray([[0, 1], bad], jnp.int32)
+    surface = SURFACE._replace(segments=segments)
+    only_good = Surface(SURFACE.nodes, segments[:1])
+    for detect in (
+        jax.jit(lambda s: jaxcontact.all_to_all(X, s, radius=2.0)),
+        jax.jit(lambda s: jaxcontact.swept(X, X[::-1], s)),
+    ):
+        got, expected = detect(surface), detect(only_good)
+        for field, value in zip(got._fields, got, strict=True):
+            np.testing.assert_array_equal(value, getattr(expected, field), err_msg=field)
