@@ -10,6 +10,10 @@ from jaxcontact._dense import swept as swept
 from jaxcontact._plan import BucketPlan as BucketPlan
 from jaxcontact._plan import plan_buckets as plan_buckets
 from jaxcontact._plan import replan as replan
+from jaxcontact._shard import contact_forces as contact_forces
+from jaxcontact._shard import plan_batch as plan_batch
+from jaxcontact._shard import plan_sharded as plan_sharded
+from jaxcontact._shard import sharded as sharded
 from jaxcontact._types import Contact as Contact
 from jaxcontact._types import Crossing as Crossing
 from jaxcontact._types import Surface as Surface

@@ -123,14 +123,16 @@ def plan_buckets(
         travel = cull_reach = radius
     block_size = max(1, min(block_size, max(num_rows, 1)))
     num_blocks = -(-num_rows // block_size)
+    if use_cells is None:
+        use_cells = num_segments > DENSE_LIMIT
+    # Plans of scenes with nothing to bin still say whether cells are used, so
+    # that ``replan`` and ``plan_batch`` keep the choice when they grow them.
     if num_rows == 0 or num_segments == 0:
-        return BucketPlan(num_rows, block_size, 1, for_paths)
+        return BucketPlan(num_rows, block_size, 1, for_paths, use_cells)
     _, blocks = broad_phase(
         query_low, query_high, slave_ok, segments, cull_reach, block_size, num_blocks
     )
     block_capacity = min(num_blocks, _grow(int(blocks.count), slack))
-    if use_cells is None:
-        use_cells = num_segments > DENSE_LIMIT
     if not use_cells:
         return BucketPlan(num_rows, block_size, block_capacity, for_paths)
 
@@ -144,7 +146,7 @@ def plan_buckets(
     points = np.asarray(query)[kept]
     ok = np.asarray(segments.ok)
     if points.size == 0 or not ok.any():
-        return BucketPlan(num_rows, block_size, block_capacity, for_paths)
+        return BucketPlan(num_rows, block_size, block_capacity, for_paths, use_cells)
     low = np.maximum(np.asarray(master.low), points.min(axis=0))
     high = np.minimum(np.asarray(master.high), points.max(axis=0))
     extent = np.maximum(high - low, 0.0)

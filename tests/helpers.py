@@ -272,3 +272,53 @@ def blind_spot(vertex, previous, following, distance: float) -> np.ndarray:
     if np.linalg.norm(away) < 1e-3:  # straight through: any normal direction will do
         away = np.array([back[1], -back[0]])
     return vertex + distance * away / np.linalg.norm(away)
+
+
+def binned_tolerance(dtype, points):
+    """Rounding of the per-pair kernel: a few ulps of the coordinates' scale.
+
+    XLA contracts a*b+c into fused multiply-adds differently in different
+    fusions, so the same kernel on the same pair may round differently in the
+    dense and the binned program.
+    """
+    return 16 * float(jnp.finfo(dtype).eps) * (1 + float(jnp.max(jnp.abs(points), initial=0)))
+
+
+def assert_same_contact(binned, dense, radius=None, degenerate=False):
+    """The same rows, up to rounding.
+
+    Rows must choose the same segment, except where two segments lie at the
+    same distance to within rounding (overlapping or touching segments), where
+    either is correct and the gaps' magnitudes must agree; and ``found`` may
+    differ only for a slave at the radius to within rounding.
+    """
+    assert not bool(binned.overflow)
+    tol = binned_tolerance(dense.gap.dtype, dense.point)
+    both = np.asarray(binned.found & dense.found)
+    same = np.asarray(binned.segment == dense.segment)
+    np.testing.assert_allclose(np.abs(binned.gap)[both], np.abs(dense.gap)[both], atol=tol)
+    flipped = np.asarray(binned.found != dense.found)
+    if flipped.any():
+        assert radius is not None, "found differs and no radius to explain it"
+        distance = np.where(binned.found, np.abs(binned.gap), np.abs(dense.gap))[flipped]
+        np.testing.assert_allclose(distance, radius, atol=tol)
+    agree = both & same
+    for field in ("gap", "xi", "point", "normal"):
+        got, want = np.asarray(getattr(binned, field)), np.asarray(getattr(dense, field))
+        np.testing.assert_allclose(got[agree], want[agree], atol=tol)
+    if not degenerate:
+        # Rows that differ for rounding must be rare, never the rule.
+        assert (both & ~same).sum() <= max(2, 0.01 * both.sum())
+
+
+def assert_same_crossing(binned, dense, degenerate=False):
+    """The same rows, up to rounding; an earliest-crossing tie may go either way."""
+    assert not bool(binned.overflow)
+    tol = binned_tolerance(dense.t.dtype, dense.point)
+    np.testing.assert_array_equal(binned.crossed, dense.crossed)
+    np.testing.assert_allclose(binned.t, dense.t, atol=tol)
+    same = np.asarray(binned.segment == dense.segment)
+    got, want = np.asarray(binned.point), np.asarray(dense.point)
+    np.testing.assert_allclose(got[same], want[same], atol=tol)
+    if not degenerate:
+        assert (~same).sum() <= max(2, 0.01 * np.asarray(dense.crossed).sum())

@@ -23,61 +23,12 @@ from jaxcontact import (
     swept,
 )
 from jaxcontact.scenes import cutting_scene, paper_scene, rough_die_scene
+from tests.helpers import assert_same_contact, assert_same_crossing
 
 jit_bucket_sort = jax.jit(bucket_sort, static_argnames="plan")
 jit_bucket_swept = jax.jit(bucket_swept, static_argnames="plan")
 jit_all_to_all = jax.jit(all_to_all)
 jit_swept = jax.jit(swept)
-
-
-def _tolerance(dtype, points):
-    """Rounding of the per-pair kernel: a few ulps of the coordinates' scale.
-
-    XLA contracts a*b+c into fused multiply-adds differently in different
-    fusions, so the same kernel on the same pair may round differently in the
-    dense and the binned program.
-    """
-    return 16 * float(jnp.finfo(dtype).eps) * (1 + float(jnp.max(jnp.abs(points), initial=0)))
-
-
-def assert_same_contact(binned, dense, radius=None, degenerate=False):
-    """The same rows, up to rounding.
-
-    Rows must choose the same segment, except where two segments lie at the
-    same distance to within rounding (overlapping or touching segments), where
-    either is correct and the gaps' magnitudes must agree; and ``found`` may
-    differ only for a slave at the radius to within rounding.
-    """
-    assert not bool(binned.overflow)
-    tol = _tolerance(dense.gap.dtype, dense.point)
-    both = np.asarray(binned.found & dense.found)
-    same = np.asarray(binned.segment == dense.segment)
-    np.testing.assert_allclose(np.abs(binned.gap)[both], np.abs(dense.gap)[both], atol=tol)
-    flipped = np.asarray(binned.found != dense.found)
-    if flipped.any():
-        assert radius is not None, "found differs and no radius to explain it"
-        distance = np.where(binned.found, np.abs(binned.gap), np.abs(dense.gap))[flipped]
-        np.testing.assert_allclose(distance, radius, atol=tol)
-    agree = both & same
-    for field in ("gap", "xi", "point", "normal"):
-        got, want = np.asarray(getattr(binned, field)), np.asarray(getattr(dense, field))
-        np.testing.assert_allclose(got[agree], want[agree], atol=tol)
-    if not degenerate:
-        # Rows that differ for rounding must be rare, never the rule.
-        assert (both & ~same).sum() <= max(2, 0.01 * both.sum())
-
-
-def assert_same_crossing(binned, dense, degenerate=False):
-    """The same rows, up to rounding; an earliest-crossing tie may go either way."""
-    assert not bool(binned.overflow)
-    tol = _tolerance(dense.t.dtype, dense.point)
-    np.testing.assert_array_equal(binned.crossed, dense.crossed)
-    np.testing.assert_allclose(binned.t, dense.t, atol=tol)
-    same = np.asarray(binned.segment == dense.segment)
-    got, want = np.asarray(binned.point), np.asarray(dense.point)
-    np.testing.assert_allclose(got[same], want[same], atol=tol)
-    if not degenerate:
-        assert (~same).sum() <= max(2, 0.01 * np.asarray(dense.crossed).sum())
 
 
 SCENES = {

@@ -13,3 +13,30 @@ def test_readme_example_runs():
     exec(compile(example, str(README), "exec"), namespace)
     assert int(namespace["contact"].found.sum()) > 0
     assert namespace["grad"].shape == namespace["scene"].x.shape
+
+
+def test_readme_batch_and_device_snippets_run():
+    import jax
+    import jax.numpy as jnp
+
+    import jaxcontact
+    from jaxcontact.scenes import cutting_scene
+
+    section = README.read_text().split("### Batches and devices")[1].split("\n## ")[0]
+    snippets = re.findall(r"```python\n(.*?)```", section, flags=re.S)
+    assert len(snippets) == 2
+    scenes = [cutting_scene(600, tip) for tip in (15.0, 18.0)]
+    public = [name for name in dir(jaxcontact) if not name.startswith("_")]
+    namespace = {name: getattr(jaxcontact, name) for name in public}
+    namespace.update(
+        jax=jax,
+        xs=jnp.stack([s.x for s in scenes]),
+        surfaces=jax.tree.map(lambda *v: jnp.stack(v), *[s.surface for s in scenes]),
+        x=scenes[1].x,
+        surface=scenes[1].surface,
+    )
+    for snippet in snippets:
+        exec(compile(snippet, str(README), "exec"), namespace)
+    assert namespace["contacts"].gap.shape == (2, scenes[0].x.shape[0])
+    assert not bool(namespace["contact"].overflow)
+    assert namespace["on_tool"].shape == (2,)

@@ -1,0 +1,200 @@
+"""Time against device count and batch size.
+
+    python benchmarks/scaling.py            # devices 1, 2, 4; batches 1, 4, 16
+    python benchmarks/scaling.py --quick    # small sizes, a smoke test
+
+Device counts are fixed when JAX starts, so each count runs in a process of
+its own (``--xla_force_host_platform_device_count``). On a CPU those devices
+share the machine's cores: on a 2-core machine the numbers show the overhead
+of splitting (padding, the shard_map, the overflow psum, a gather where N is
+not a multiple of the device count), not a speed-up. Run it where the devices
+are real (several GPUs, or hosts with ``examples/multihost.py``) to see
+scaling; the script is the same.
+
+Batches: B cutting scenes (the tool at B positions) under ``jax.vmap`` with
+one plan from ``plan_batch``, against a Python loop over the same scenes and
+against ``jax.lax.map``; time per scene.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+
+RESULT = "RESULT "
+
+
+def worker(devices: int, num_nodes: int, repeats: int, batches: list[int]) -> None:
+    import functools
+
+    import jax
+    import jax.numpy as jnp
+
+    from jaxcontact import (
+        Surface,
+        all_to_all,
+        bucket_sort,
+        plan_batch,
+        plan_buckets,
+        plan_sharded,
+        sharded,
+    )
+    from jaxcontact._timing import time_call
+    from jaxcontact.scenes import cutting_scene
+
+    assert len(jax.devices()) == devices, jax.devices()
+    radius = 0.1
+
+    def emit(kind, method, size, timing, per=1):
+        row = {
+            "kind": kind,
+            "devices": devices,
+            "method": method,
+            "size": size,
+            "median_ms": timing.median_s * 1e3 / per,
+            "p10_ms": timing.p10_s * 1e3 / per,
+            "p90_ms": timing.p90_s * 1e3 / per,
+            "compile_s": timing.compile_s,
+        }
+        print(RESULT + json.dumps(row), flush=True)
+
+    scene = cutting_scene(num_nodes, 18.0)
+    mesh = jax.make_mesh((devices,), ("slaves",))
+    dense = jax.jit(functools.partial(sharded(all_to_all, mesh), radius=radius))
+    emit(
+        "devices",
+        "all_to_all",
+        num_nodes,
+        time_call(dense, scene.x, scene.surface, repeats=repeats),
+    )
+    plan = plan_sharded(scene.x, scene.surface, devices, radius=radius)
+    binned = jax.jit(functools.partial(sharded(bucket_sort, mesh), radius=radius, plan=plan))
+    emit(
+        "devices",
+        "bucket_sort",
+        num_nodes,
+        time_call(binned, scene.x, scene.surface, repeats=repeats),
+    )
+    if devices != 1:
+        return
+
+    # Batches, on one device.
+    for size in batches:
+        tips = jnp.linspace(12.0, 20.5, size)
+        scenes = [cutting_scene(num_nodes, float(tip)) for tip in tips]
+        x = jnp.stack([s.x for s in scenes])
+        surface = Surface(
+            jnp.stack([s.surface.nodes for s in scenes]),
+            jnp.stack([s.surface.segments for s in scenes]),
+        )
+        for name in ("all_to_all", "bucket_sort"):
+            if name == "bucket_sort":
+                plan = plan_batch(x, surface, radius=radius)
+                one = functools.partial(bucket_sort, radius=radius, plan=plan)
+            else:
+                one = functools.partial(all_to_all, radius=radius)
+            mapped = jax.jit(jax.vmap(one))
+            emit(
+                "batch", f"{name} vmap", size, time_call(mapped, x, surface, repeats=repeats), size
+            )
+            serial = jax.jit(lambda x, s, one=one: jax.lax.map(lambda a: one(*a), (x, s)))
+            emit(
+                "batch",
+                f"{name} lax.map",
+                size,
+                time_call(serial, x, surface, repeats=repeats),
+                size,
+            )
+            if name == "bucket_sort":
+                own = [
+                    functools.partial(
+                        bucket_sort, radius=radius, plan=plan_buckets(s.x, s.surface, radius=radius)
+                    )
+                    for s in scenes
+                ]
+            else:
+                own = [one] * size
+            single = [jax.jit(f) for f in own]
+
+            def loop(x, surface, single=single):
+                return [
+                    f(x[i], Surface(surface.nodes[i], surface.segments[i]))
+                    for i, f in enumerate(single)
+                ]
+
+            emit(
+                "batch",
+                f"{name} Python loop",
+                size,
+                time_call(loop, x, surface, repeats=repeats),
+                size,
+            )
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--quick", action="store_true")
+    parser.add_argument("--repeats", type=int, default=20)
+    parser.add_argument("--worker", type=int, help=argparse.SUPPRESS)
+    parser.add_argument("--nodes", type=int, default=None)
+    args = parser.parse_args()
+    num_nodes = args.nodes or (5_000 if args.quick else 81_939)
+    batches = [1, 4] if args.quick else [1, 4, 16]
+    repeats = 5 if args.quick else args.repeats
+    if args.worker:
+        worker(args.worker, num_nodes, repeats, batches)
+        return
+
+    import jax
+
+    rows = []
+    for devices in (1, 2, 4):
+        env = dict(os.environ)
+        env["XLA_FLAGS"] = f"--xla_force_host_platform_device_count={devices}"
+        done = subprocess.run(
+            [sys.executable, __file__, "--worker", str(devices), "--nodes", str(num_nodes)]
+            + (["--quick"] if args.quick else ["--repeats", str(repeats)]),
+            env=env,
+            capture_output=True,
+            text=True,
+            check=False,
+        )
+        if done.returncode:
+            sys.exit(done.stdout + done.stderr)
+        rows += [
+            json.loads(line[len(RESULT) :])
+            for line in done.stdout.splitlines()
+            if line.startswith(RESULT)
+        ]
+
+    print(
+        f"# scaling.py: jax {jax.__version__}, {os.cpu_count()} CPU cores,"
+        f" cutting scene {num_nodes:,} nodes, float32"
+    )
+    print("\n## Slaves split over devices (per call)\n")
+    print("| method | devices | median ms | p10-p90 ms | vs 1 device | compile s |")
+    print("|---|---:|---:|---:|---:|---:|")
+    base = {
+        r["method"]: r["median_ms"] for r in rows if r["kind"] == "devices" and r["devices"] == 1
+    }
+    for r in (r for r in rows if r["kind"] == "devices"):
+        spread = f"{r['p10_ms']:.3f}-{r['p90_ms']:.3f}"
+        ratio = r["median_ms"] / base[r["method"]]
+        print(
+            f"| {r['method']} | {r['devices']} | {r['median_ms']:.3f} | {spread}"
+            f" | {ratio:.2f}x | {r['compile_s']:.2f} |"
+        )
+    print("\n## Batches of scenes on one device (per scene)\n")
+    print("| method | batch | median ms per scene | p10-p90 ms | compile s |")
+    print("|---|---:|---:|---:|---:|")
+    for r in (r for r in rows if r["kind"] == "batch"):
+        compile_s = "" if r["compile_s"] is None else f"{r['compile_s']:.2f}"
+        spread = f"{r['p10_ms']:.3f}-{r['p90_ms']:.3f}"
+        print(f"| {r['method']} | {r['size']} | {r['median_ms']:.3f} | {spread} | {compile_s} |")
+
+
+if __name__ == "__main__":
+    main()

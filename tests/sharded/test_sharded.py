@@ -1,0 +1,140 @@
+"""Slaves split over 4 CPU devices; run by ``tests/test_shard.py`` in a process of its own.
+
+Collected only when ``JAXCONTACT_SHARDED=1`` (set with the device count
+before JAX starts).
+"""
+
+import functools
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from jax.sharding import NamedSharding
+from jax.sharding import PartitionSpec as P
+
+from jaxcontact import (
+    all_to_all,
+    bucket_sort,
+    bucket_swept,
+    contact_forces,
+    plan_buckets,
+    plan_sharded,
+    sharded,
+    swept,
+)
+from jaxcontact.scenes import cutting_scene, rough_die_scene
+from tests.helpers import assert_same_contact, assert_same_crossing
+
+DEVICES = 4
+RADIUS = 0.1
+
+
+@pytest.fixture(scope="module")
+def mesh():
+    assert len(jax.devices()) == DEVICES, jax.devices()
+    return jax.make_mesh((DEVICES,), ("slaves",))
+
+
+# 1,100 rows split evenly; 1,102 (cutting_scene rounds to a grid) need padding.
+SIZES = [1_000, 1_100]
+
+
+def _scene(num_nodes, dtype=jnp.float32):
+    return cutting_scene(num_nodes, 18.0, x_tip_prev=18.3, dtype=dtype)
+
+
+@pytest.mark.parametrize("num_nodes", SIZES)
+@pytest.mark.parametrize("dtype", [jnp.float32, jnp.float64])
+def test_sharded_contact_equals_one_device(mesh, num_nodes, dtype):
+    scene = _scene(num_nodes, dtype)
+    mask = jnp.asarray(np.arange(scene.x.shape[0]) % 7 != 3)
+    one = all_to_all(scene.x, scene.surface, radius=RADIUS, mask=mask)
+    dense = jax.jit(sharded(all_to_all, mesh))(scene.x, scene.surface, radius=RADIUS, mask=mask)
+    for field, value in zip(one._fields, one, strict=True):
+        np.testing.assert_array_equal(getattr(dense, field), value, err_msg=field)
+    plan = plan_sharded(scene.x, scene.surface, DEVICES, radius=RADIUS, mask=mask)
+    binned = jax.jit(sharded(bucket_sort, mesh), static_argnames="plan")(
+        scene.x, scene.surface, radius=RADIUS, mask=mask, plan=plan
+    )
+    assert_same_contact(binned, one, RADIUS)
+    if scene.x.shape[0] % DEVICES == 0:
+        assert dense.gap.sharding.spec == P("slaves")
+        assert binned.gap.sharding.spec == P("slaves")
+
+
+@pytest.mark.parametrize("num_nodes", SIZES)
+def test_sharded_crossing_equals_one_device(mesh, num_nodes):
+    scene = _scene(num_nodes)
+    one = swept(scene.x_prev, scene.x, scene.surface)
+    assert int(one.crossed.sum()) > 0
+    dense = jax.jit(sharded(swept, mesh))(scene.x_prev, scene.x, scene.surface)
+    for field, value in zip(one._fields, one, strict=True):
+        np.testing.assert_array_equal(getattr(dense, field), value, err_msg=field)
+    plan = plan_sharded(scene.x, scene.surface, DEVICES, x_prev=scene.x_prev)
+    binned = jax.jit(sharded(bucket_swept, mesh), static_argnames="plan")(
+        scene.x_prev, scene.x, scene.surface, plan=plan
+    )
+    assert_same_crossing(binned, one)
+
+
+def test_sharded_bucket_sort_with_cells_on_the_rough_die(mesh):
+    scene = rough_die_scene(4_000, 400)
+    plan = plan_sharded(scene.x, scene.surface, DEVICES, radius=scene.radius)
+    assert plan.use_cells
+    binned = jax.jit(sharded(bucket_sort, mesh), static_argnames="plan")(
+        scene.x, scene.surface, radius=scene.radius, plan=plan
+    )
+    assert_same_contact(binned, all_to_all(scene.x, scene.surface, radius=scene.radius))
+
+
+def test_overflow_on_one_device_is_overflow_of_the_whole(mesh):
+    # A plan made for the quarter of the rows clear of the tool keeps one
+    # block; the device holding the cut overflows, and the result says so.
+    scene = _scene(1_100)
+    per_device = -(-scene.x.shape[0] // DEVICES)
+    clear = plan_buckets(scene.x[:per_device], scene.surface, radius=RADIUS)
+    assert clear.block_capacity == 1
+    detect = jax.jit(sharded(bucket_sort, mesh), static_argnames="plan")
+    result = detect(scene.x, scene.surface, radius=RADIUS, plan=clear)
+    assert bool(result.overflow)
+
+
+def test_tool_force_is_a_collective_sum_equal_to_one_device(mesh):
+    scene = _scene(1_100, jnp.float64)
+    one = contact_forces(all_to_all(scene.x, scene.surface, radius=RADIUS), 1e3)[1]
+
+    # Explicitly: inside shard_map, the reaction is a psum over the devices.
+    def local(x, surface):
+        contact = all_to_all(x, surface, radius=RADIUS)
+        return contact_forces(contact, 1e3, axis_name="slaves")
+
+    explicit = jax.jit(
+        jax.shard_map(
+            local, mesh=mesh, in_specs=(P("slaves"), P()), out_specs=(P("slaves"), P()),
+            check_vma=False,
+        )
+    )  # fmt: skip
+    # (shard_map itself needs rows divisible by the device count; sharded pads.)
+    rows = scene.x.shape[0] // DEVICES * DEVICES
+    x = jax.device_put(scene.x[:rows], NamedSharding(mesh, P("slaves")))
+    part = contact_forces(all_to_all(scene.x[:rows], scene.surface, radius=RADIUS), 1e3)[1]
+    np.testing.assert_allclose(explicit(x, scene.surface)[1], part, rtol=1e-12)
+
+    # Implicitly: jit over a sharded result; XLA's partitioner adds the all-reduce.
+    contact = jax.jit(sharded(all_to_all, mesh))(scene.x, scene.surface, radius=RADIUS)
+    total = jax.jit(lambda c: contact_forces(c, 1e3)[1])(contact)
+    np.testing.assert_allclose(total, one, rtol=1e-12)
+
+
+def test_gradients_through_the_sharded_detector_equal_one_device(mesh):
+    scene = _scene(1_100, jnp.float64)
+
+    def energy(x, detect):
+        contact = detect(x, scene.surface, radius=RADIUS)
+        return jnp.sum(jnp.where(contact.active, contact.gap**2, 0))
+
+    one = jax.grad(functools.partial(energy, detect=all_to_all))(scene.x)
+    split = jax.jit(jax.grad(functools.partial(energy, detect=sharded(all_to_all, mesh))))(scene.x)
+    assert float(jnp.abs(one).sum()) > 0
+    np.testing.assert_allclose(split, one, rtol=1e-12, atol=1e-15)

@@ -1,0 +1,143 @@
+"""Batches of scenes: every detector under vmap, one bucket plan for the batch."""
+
+import dataclasses
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from jaxcontact import (
+    Surface,
+    all_to_all,
+    bucket_sort,
+    bucket_swept,
+    contact_forces,
+    plan_batch,
+    plan_buckets,
+    swept,
+)
+from jaxcontact.scenes import cutting_scene, rough_die_scene
+from tests.helpers import assert_same_contact, assert_same_crossing
+
+# The tool in, half in and clear of the workpiece: very different needs.
+TIPS = (12.0, 18.0, 20.5)
+RADIUS = 0.1
+
+
+def _batch(dtype=jnp.float32):
+    scenes = [cutting_scene(900, tip, x_tip_prev=tip + 0.3, dtype=dtype) for tip in TIPS]
+    x = jnp.stack([s.x for s in scenes])
+    x_prev = jnp.stack([s.x_prev for s in scenes])
+    surface = Surface(
+        jnp.stack([s.surface.nodes for s in scenes]),
+        jnp.stack([s.surface.segments for s in scenes]),
+    )
+    # Each scene masks out a different block of rows.
+    mask = np.ones(x.shape[:2], bool)
+    for i in range(len(scenes)):
+        mask[i, 100 * i : 100 * i + 50] = False
+    return scenes, x_prev, x, surface, jnp.asarray(mask)
+
+
+def _row(tree, i):
+    return jax.tree.map(lambda v: v if v.ndim == 0 else v[i], tree)
+
+
+@pytest.mark.parametrize("use_cells", [False, True])
+def test_one_plan_for_a_batch_of_contacts_equals_a_loop(use_cells):
+    scenes, _, x, surface, mask = _batch()
+    plan = plan_batch(x, surface, radius=RADIUS, mask=mask, use_cells=use_cells)
+    # The batch plan is at least as large as any scene's own.
+    for scene in scenes:
+        own = plan_buckets(scene.x, scene.surface, radius=RADIUS, use_cells=use_cells)
+        assert plan.block_capacity >= own.block_capacity
+    detect = jax.jit(jax.vmap(lambda x, s, m: bucket_sort(x, s, radius=RADIUS, mask=m, plan=plan)))
+    batched = detect(x, surface, mask)
+    assert not bool(jnp.any(batched.overflow))
+    for i, scene in enumerate(scenes):
+        dense = all_to_all(scene.x, scene.surface, radius=RADIUS, mask=mask[i])
+        assert_same_contact(_row(batched, i), dense, RADIUS)
+
+
+def test_one_plan_for_a_batch_of_paths_equals_a_loop():
+    scenes, x_prev, x, surface, mask = _batch()
+    plan = plan_batch(x, surface, x_prev=x_prev, mask=mask)
+    detect = jax.jit(jax.vmap(lambda p, x, s, m: bucket_swept(p, x, s, mask=m, plan=plan)))
+    batched = detect(x_prev, x, surface, mask)
+    for i, scene in enumerate(scenes):
+        dense = swept(scene.x_prev, scene.x, scene.surface, mask=mask[i])
+        assert int(dense.crossed.sum()) > 0 or TIPS[i] > 20
+        assert_same_crossing(_row(batched, i), dense)
+
+
+def test_a_shared_surface_is_planned_for_every_scene():
+    scenes, _, x, _, _ = _batch()
+    shared = scenes[1].surface
+    plan = plan_batch(x, shared, radius=RADIUS)
+    batched = jax.vmap(lambda x: bucket_sort(x, shared, radius=RADIUS, plan=plan))(x)
+    for i in range(len(scenes)):
+        assert_same_contact(_row(batched, i), all_to_all(x[i], shared, radius=RADIUS), RADIUS)
+
+
+def test_plan_batch_grows_a_plan_that_another_scene_outgrows():
+    # Planned on the clear scene alone the plan keeps one block; the batch
+    # plan must hold the deep cut as well, and says so by not overflowing.
+    scenes, _, x, surface, _ = _batch()
+    lone = plan_buckets(scenes[2].x, scenes[2].surface, radius=RADIUS)
+    detect = jax.vmap(lambda x, s, plan: bucket_sort(x, s, radius=RADIUS, plan=plan), (0, 0, None))
+    too_small = jax.jit(detect, static_argnums=2)(x, surface, lone)
+    assert bool(too_small.overflow[0])
+    plan = plan_batch(x, surface, radius=RADIUS)
+    assert dataclasses.replace(plan, block_capacity=lone.block_capacity) != plan
+    assert not bool(jnp.any(jax.jit(detect, static_argnums=2)(x, surface, plan).overflow))
+
+
+def test_plan_batch_checks_the_batch_shape():
+    scene = cutting_scene(100, 18.0)
+    with pytest.raises(ValueError, match=r"x must have shape \(B, N, 2\)"):
+        plan_batch(scene.x, scene.surface, radius=RADIUS)
+
+
+def test_dense_detectors_and_forces_map_over_a_batch():
+    scenes, x_prev, x, surface, mask = _batch(jnp.float64)
+    contact = jax.vmap(lambda x, s, m: all_to_all(x, s, radius=RADIUS, mask=m))(x, surface, mask)
+    crossing = jax.vmap(lambda p, x, s, m: swept(p, x, s, mask=m))(x_prev, x, surface, mask)
+    forces, on_tool = jax.vmap(lambda c: contact_forces(c, 1e3))(contact)
+    for i, scene in enumerate(scenes):
+        one = all_to_all(scene.x, scene.surface, radius=RADIUS, mask=mask[i])
+        for field in ("gap", "segment", "found", "active"):
+            np.testing.assert_array_equal(getattr(contact, field)[i], getattr(one, field))
+        path = swept(scene.x_prev, scene.x, scene.surface, mask=mask[i])
+        np.testing.assert_array_equal(crossing.t[i], path.t)
+        single, total = contact_forces(one, 1e3)
+        np.testing.assert_allclose(forces[i], single)
+        np.testing.assert_allclose(on_tool[i], total)
+
+
+def test_contact_forces_push_active_slaves_out_and_balance_on_the_master():
+    scene = cutting_scene(2_000, 18.0, dtype=jnp.float64)
+    contact = all_to_all(scene.x, scene.surface, radius=RADIUS)
+    assert int(contact.active.sum()) > 0
+    on_slaves, on_master = contact_forces(contact, 2.0)
+    active = np.asarray(contact.active)
+    # Along the outward normal, of size stiffness * depth; zero elsewhere.
+    np.testing.assert_allclose(
+        np.asarray(on_slaves)[active],
+        (2.0 * -np.asarray(contact.gap)[active])[:, None] * np.asarray(contact.normal)[active],
+    )
+    assert not np.asarray(on_slaves)[~active].any()
+    np.testing.assert_allclose(on_master, -np.asarray(on_slaves).sum(axis=0))
+    # The tool, moving in -x into the workpiece, is pushed back (+x).
+    assert float(on_master[0]) > 0
+
+
+def test_a_plan_with_nothing_near_still_records_cells_for_many_segments():
+    # plan_batch grows the first scene's plan with replan, which keeps its
+    # narrow phase: a first scene with nothing near a 400-segment die must not
+    # switch cells off for the whole batch.
+    scene = rough_die_scene(2_000, 400)
+    far = scene.x.at[:, 1].add(100.0)
+    assert plan_buckets(far, scene.surface, radius=scene.radius).use_cells
+    plan = plan_batch(jnp.stack([far, scene.x]), scene.surface, radius=scene.radius)
+    assert plan.use_cells

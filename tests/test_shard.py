@@ -1,0 +1,90 @@
+"""Runs ``tests/sharded`` in a process with 4 CPU devices.
+
+JAX fixes its device count when it starts, and this process has started it
+with one; the sharded tests need their own.
+"""
+
+import os
+import socket
+import subprocess
+import sys
+from pathlib import Path
+
+import jax
+import numpy as np
+from jax.sharding import PartitionSpec as P
+
+from jaxcontact import all_to_all, sharded
+from jaxcontact.scenes import cutting_scene
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def test_sharded_suite_on_four_cpu_devices():
+    env = dict(os.environ)
+    env["XLA_FLAGS"] = (
+        env.get("XLA_FLAGS", "") + " --xla_force_host_platform_device_count=4"
+    ).strip()
+    env["JAXCONTACT_SHARDED"] = "1"
+    done = subprocess.run(
+        [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "tests/sharded"],
+        cwd=ROOT,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=900,
+    )
+    assert done.returncode == 0, done.stdout[-6000:] + done.stderr[-3000:]
+    assert " passed" in done.stdout
+
+
+def test_sharded_on_one_device_is_the_detector():
+    scene = cutting_scene(500, 18.0)
+    mesh = jax.make_mesh((1,), ("slaves",))
+    got = jax.jit(sharded(all_to_all, mesh))(scene.x, scene.surface, radius=0.1)
+    want = all_to_all(scene.x, scene.surface, radius=0.1)
+    for field, value in zip(want._fields, want, strict=True):
+        np.testing.assert_array_equal(getattr(got, field), value, err_msg=field)
+    assert got.gap.sharding.spec == P("slaves")
+
+
+def _example(*args, devices: int):
+    env = dict(os.environ)
+    env["XLA_FLAGS"] = f"--xla_force_host_platform_device_count={devices}"
+    return subprocess.Popen(
+        [sys.executable, "examples/multihost.py", "--nodes", "3000", *args],
+        cwd=ROOT,
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+    )
+
+
+def _summary(process) -> str:
+    out, _ = process.communicate(timeout=300)
+    assert process.returncode == 0, out[-4000:]
+    return out
+
+
+def test_multihost_example_runs_on_one_host_and_on_two_processes():
+    one = _summary(_example(devices=4))
+    assert "1 process(es), 4 device(s)" in one
+    assert "bucket sort = all-to-all: True, overflow: False" in one
+    # Two processes of two devices each, coordinated over localhost: the same answer.
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    both = [
+        _example("--coordinator", f"127.0.0.1:{port}", "--processes", "2", "--process-id", str(i),
+                 devices=2)
+        for i in range(2)
+    ]  # fmt: skip
+    first, _ = _summary(both[0]), _summary(both[1])
+    assert "2 process(es), 4 device(s)" in first
+
+    def found(out):
+        line = next(line for line in out.splitlines() if "device(s):" in line)
+        return line.split("device(s):")[1]
+
+    assert found(first) == found(one)
