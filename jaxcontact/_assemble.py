@@ -89,7 +89,7 @@ def prefer_outside(x: Array, segments: Segments, choice: Array) -> Array:
     return jnp.where(switch, other, choice)
 
 
-def in_stages(go: Array, stages, skipped):
+def in_stages(go: Array, stages, skipped, value=None):
     """Runs ``stages`` in turn, each on the last one's result, when ``go``.
 
     Each stage is its own ``lax.cond`` on ``go``, returning ``skipped[i]``
@@ -98,9 +98,10 @@ def in_stages(go: Array, stages, skipped):
     read its result: on the CPU it then re-ran the search per gathered value
     (measured 5x slower on the cutting scene), and ``optimization_barrier``
     does not stop that fusion there. Under ``vmap`` the conds become selects:
-    both branches run and the boundaries are lost.
+    both branches run and the boundaries are lost, which is why the searches
+    run through ``_search.one_scene_at_a_time``. ``value`` goes to the first
+    stage.
     """
-    value = None
     for stage, empty in zip(stages, skipped, strict=True):
         value = jax.lax.cond(go, stage, lambda _, empty=empty: empty, value)
     return value

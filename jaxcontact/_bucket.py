@@ -18,6 +18,7 @@ Whenever ``overflow`` is false the result equals ``all_to_all``'s (``swept``'s).
 
 from __future__ import annotations
 
+import functools
 from typing import NamedTuple
 
 import jax
@@ -34,6 +35,7 @@ from jaxcontact._assemble import (
 from jaxcontact._broad import Blocks, broad_phase, conservative_margin, segment_boxes
 from jaxcontact._cells import CellLists
 from jaxcontact._geometry import first_hit_time, squared_distance
+from jaxcontact._inputs import Segments
 from jaxcontact._narrow import (
     choose,
     kept_rows,
@@ -42,6 +44,7 @@ from jaxcontact._narrow import (
     vmapped,
 )
 from jaxcontact._plan import BucketPlan, plan_buckets
+from jaxcontact._search import one_scene_at_a_time
 from jaxcontact._types import Array, Contact, Crossing, Surface
 
 
@@ -91,27 +94,45 @@ def _candidates_impl(x, surface, radius, skin, mask, plan):
 
 
 def _search_kept(
-    x, query, ok, blocks, segments, boxes, pair_value, plan, listed, from_choice, empty
+    x, query, rows, ok, blocks, segments, boxes, kernel, plan, listed, from_choice, empty
 ):
     """The narrow phase on the kept slaves and the rows written back: search,
     assemble (``from_choice(choice, overflow)``), scatter, each skipped when
-    no block was kept (``_assemble.in_stages``). ``boxes()`` makes the
-    segment boxes the cells need; ``empty(rows, overflow)`` a not-found result.
+    no block was kept (``_assemble.in_stages``); the search scene by scene
+    under ``vmap`` (``_search.one_scene_at_a_time``). Pairs are scored by
+    ``kernel(*row, a, b)`` over ``rows``; ``empty(rows, overflow)`` makes a
+    not-found result.
     """
     no_overflow = jnp.zeros((), bool)
-
-    def search(_):
-        return choose(query, ok, segments, boxes(), pair_value, plan, listed)
+    go = blocks.count > 0
+    search = one_scene_at_a_time(
+        functools.partial(_binned_choice, kernel, plan, segments.num_nodes)
+    )
+    fixed = jax.lax.stop_gradient((rows, query, segments.start, segments.end, boxes))
+    found = search(go, *fixed, ok, segments.ok, segments.nodes, listed)
 
     def write(part):
         return scatter_blocks(part, blocks, empty(x, part.overflow), plan.block_size)
 
-    no_choice = jnp.full(query.shape[:1], -1, jnp.int32), no_overflow
     return in_stages(
-        blocks.count > 0,
-        [search, lambda found: from_choice(*found), write],
-        [no_choice, empty(query, no_overflow), empty(x, no_overflow)],
+        go,
+        [lambda found: from_choice(*found), write],
+        [empty(query, no_overflow), empty(x, no_overflow)],
+        found,
     )
+
+
+def _binned_choice(
+    kernel, plan, num_nodes, go, rows, query, start, end, boxes, ok, segment_ok, nodes, listed
+):
+    """(i32[S] choice, bool[] cells overflow) of the kept slaves; all -1 unless ``go``."""
+    segments = Segments(start, end, segment_ok, nodes, num_nodes)
+
+    def search(_):
+        return choose(query, ok, segments, boxes, vmapped(kernel, *rows), plan, listed)
+
+    no_choice = jnp.full(query.shape[:1], -1, jnp.int32), jnp.zeros((), bool)
+    return in_stages(go, [search], [no_choice])
 
 
 def _contact_impl(x, surface, radius, mask, plan, found=None):
@@ -136,9 +157,8 @@ def _contact_impl(x, surface, radius, mask, plan, found=None):
     def from_choice(choice, cells_overflow):
         return contact_from_choice(kept, segments, choice, radius, cells_overflow, ok)
 
-    pair_value = vmapped(squared_distance, kept)
     result = _search_kept(
-        x, kept, ok, blocks, segments, lambda: boxes, pair_value, plan, listed,
+        x, kept, (kept,), ok, blocks, segments, boxes, squared_distance, plan, listed,
         from_choice, empty_contact,
     )  # fmt: skip
     return result._replace(overflow=result.overflow | overflow)
@@ -161,19 +181,17 @@ def _crossing_impl(x_prev, x, surface, mask, plan):
     start, ok = kept_rows(x_prev, slave_ok, blocks)
     end, _ = kept_rows(x, slave_ok, blocks)
 
-    def path_boxes():
-        # Where a path meets a segment, its start lies within the path's length
-        # of that segment: bin the segments inflated by the longest kept path
-        # and look up each path's start (the paper's boxes inflated by d_max).
-        longest = jnp.max(jnp.where(ok, jnp.max(jnp.abs(end - start), axis=-1), 0), initial=0)
-        return segment_boxes(segments, conservative_margin(longest, segments.start, segments.end))
+    # Where a path meets a segment, its start lies within the path's length
+    # of that segment: bin the segments inflated by the longest kept path and
+    # look up each path's start (the paper's boxes inflated by d_max).
+    longest = jnp.max(jnp.where(ok, jnp.max(jnp.abs(end - start), axis=-1), 0), initial=0)
+    boxes = segment_boxes(segments, conservative_margin(longest, segments.start, segments.end))
 
     def from_choice(choice, overflow):
         return crossing_from_choice(start, end, segments, choice, overflow, ok)
 
-    pair_value = vmapped(first_hit_time, start, end)
     result = _search_kept(
-        x, start, ok, blocks, segments, path_boxes, pair_value, plan, None,
+        x, start, (start, end), ok, blocks, segments, boxes, first_hit_time, plan, None,
         from_choice, empty_crossing,
     )  # fmt: skip
     return result._replace(overflow=result.overflow | blocks.overflow)

@@ -7,6 +7,8 @@ evaluated once more for each slave's chosen pair.
 
 from __future__ import annotations
 
+import functools
+
 import jax
 import jax.numpy as jnp
 
@@ -14,12 +16,10 @@ from jaxcontact import _inputs
 from jaxcontact._assemble import (
     contact_from_choice,
     crossing_from_choice,
-    empty_contact,
-    empty_crossing,
     in_stages,
 )
 from jaxcontact._geometry import first_hit_time, squared_distance
-from jaxcontact._search import lowest_score
+from jaxcontact._search import lowest_score, one_scene_at_a_time
 from jaxcontact._types import Array, Contact, Crossing, Surface
 
 
@@ -53,19 +53,37 @@ def all_to_all(x: Array, surface: Surface, *, radius, mask: Array | None = None)
     return _all_to_all(x, surface, radius, mask)
 
 
-def _search_all(score, segments, slave_ok, dtype, assemble, empty):
-    """``assemble(choice)`` of the running minimum of ``score`` over every
-    segment; ``empty`` when no row is real (``_assemble.in_stages``).
+def _search_all(kernel, rows, segments, slave_ok, assemble):
+    """``assemble(choice)`` for the segment of lowest ``kernel(*row, a, b)``
+    per row, over every segment.
 
-    Masked rows are dropped when assembling, not inside the search's loop (a
-    row mask fused into it made it 3-4x slower, measured).
+    The search runs in a ``lax.cond`` (``_assemble.in_stages``), scene by
+    scene under ``vmap`` (``_search.one_scene_at_a_time``). Masked rows are
+    dropped when assembling, not inside the search's loop (a row mask fused
+    into it made it 3-4x slower, measured).
     """
+    fixed = jax.lax.stop_gradient((rows, segments.start, segments.end))
+    search = one_scene_at_a_time(functools.partial(_lowest, kernel))
+    choice = search(*fixed, segments.ok, slave_ok)
+    # The search's cond already separates it from the gathers; a cond here
+    # would only skip assembling rows that are all masked (and under vmap run
+    # both branches).
+    return assemble(choice)
+
+
+def _lowest(kernel, rows, start, end, segment_ok, slave_ok):
+    """i32[N]: per row, the segment of lowest ``kernel``; -1 if no row is real."""
+    pair_value = jax.vmap(kernel, in_axes=(0,) * len(rows) + (None, None))
+
+    def score(k):
+        value = jnp.where(segment_ok[k], pair_value(*rows, start[k], end[k]), jnp.inf)
+        return value, jnp.broadcast_to(k, value.shape)
 
     def search(_):
-        return lowest_score(score, segments.ok.shape[0], slave_ok.shape[0], dtype)
+        return lowest_score(score, segment_ok.shape[0], slave_ok.shape[0], start.dtype)
 
     no_choice = jnp.full(slave_ok.shape, -1, jnp.int32)
-    return in_stages(jnp.any(slave_ok), [search, assemble], [no_choice, empty])
+    return in_stages(jnp.any(slave_ok), [search], [no_choice])
 
 
 # Compiled as one program even when called outside jit: op by op, the unrolled
@@ -74,18 +92,12 @@ def _search_all(score, segments, slave_ok, dtype, assemble, empty):
 def _all_to_all(x, surface, radius, mask):
     x, slave_ok = _inputs.sanitize_points(x, mask)
     segments = _inputs.resolve_segments(surface)
-    to_segment = jax.vmap(squared_distance, in_axes=(0, None, None))
-
-    def score(k):
-        value = to_segment(x, segments.start[k], segments.end[k])
-        value = jnp.where(segments.ok[k], value, jnp.inf)
-        return value, jnp.broadcast_to(k, value.shape)
 
     def assemble(choice):
         return contact_from_choice(x, segments, choice, radius, no_overflow, slave_ok)
 
     no_overflow = jnp.zeros((), bool)
-    return _search_all(score, segments, slave_ok, x.dtype, assemble, empty_contact(x, no_overflow))
+    return _search_all(squared_distance, (x,), segments, slave_ok, assemble)
 
 
 def swept(x_prev: Array, x: Array, surface: Surface, *, mask: Array | None = None) -> Crossing:
@@ -121,16 +133,9 @@ def swept(x_prev: Array, x: Array, surface: Surface, *, mask: Array | None = Non
 def _swept(x_prev, x, surface, mask):
     x_prev, x, slave_ok = _inputs.check_paths(x_prev, x, mask)
     segments = _inputs.resolve_segments(surface)
-    hit_time = jax.vmap(first_hit_time, in_axes=(0, 0, None, None))
-
-    def score(k):
-        t = jnp.where(
-            segments.ok[k], hit_time(x_prev, x, segments.start[k], segments.end[k]), jnp.inf
-        )
-        return t, jnp.broadcast_to(k, t.shape)
 
     def assemble(choice):
         return crossing_from_choice(x_prev, x, segments, choice, no_overflow, slave_ok)
 
     no_overflow = jnp.zeros((), bool)
-    return _search_all(score, segments, slave_ok, x.dtype, assemble, empty_crossing(x, no_overflow))
+    return _search_all(first_hit_time, (x_prev, x), segments, slave_ok, assemble)

@@ -81,3 +81,35 @@ def lowest_score(
             lambda state: state[0] < blocks_needed, step, (jnp.zeros((), jnp.int32), carry)
         )
     return carry[1]
+
+
+def one_scene_at_a_time(fn):
+    """``fn`` that, under ``vmap``, runs scene by scene (``lax.map``) instead of batched.
+
+    For the searches only: they return segment indices, take their inputs
+    through ``stop_gradient`` (``jax.custom_batching.custom_vmap`` supports
+    no reverse-mode differentiation) and hold ``lax.cond`` s, which ``vmap``
+    would turn into selects that run both branches and lose the fusion
+    boundary ``_assemble.in_stages`` relies on. Mapped, each scene keeps
+    them; the batched rest (assembling, writing rows) stays vectorised.
+    Arguments must be arrays (or pytrees of arrays); close over static values.
+    """
+    mapped = jax.custom_batching.custom_vmap(fn)
+
+    @mapped.def_vmap
+    def rule(axis_size, in_batched, *args):
+        del axis_size
+        leaves, tree = jax.tree.flatten(args)
+        flags = jax.tree.leaves(in_batched)
+        batched = [leaf for leaf, flag in zip(leaves, flags, strict=True) if flag]
+
+        def one(slices):
+            slices = iter(slices)
+            pairs = zip(leaves, flags, strict=True)
+            full = [next(slices) if flag else leaf for leaf, flag in pairs]
+            return mapped(*jax.tree.unflatten(tree, full))
+
+        result = jax.lax.map(one, batched)
+        return result, jax.tree.map(lambda _: True, result)
+
+    return mapped
