@@ -12,8 +12,9 @@ are real (several GPUs, or hosts with ``examples/multihost.py``) to see
 scaling; the script is the same.
 
 Batches: B cutting scenes (the tool at B positions) under ``jax.vmap`` with
-one plan from ``plan_batch``, against a Python loop over the same scenes and
-against ``jax.lax.map``; time per scene.
+one plan from ``plan_batch`` (on the CPU the searches inside run scene by
+scene, the rest batched), against ``jax.lax.map`` over the whole detector and
+a Python loop of single calls, each scene with its own plan; time per scene.
 """
 
 from __future__ import annotations

@@ -5,8 +5,8 @@ The paper's bucket-sort strategy in fixed-size arrays. Three stages:
 1. Preliminary phase (``_broad``): the master's box, inflated by the search
    distance, against boxes of blocks of slaves; the blocks that meet it go
    into a buffer of planned capacity. If none meets it the rest is skipped
-   with a ``lax.cond`` (under ``vmap`` a ``cond`` runs both branches; the
-   result is still right, only the saving is lost).
+   with ``lax.cond`` s (under ``vmap`` the search still skips, scene by
+   scene on the CPU; the other stages run both branches, which stays right).
 2. Narrow phase on the kept slaves: with few segments, each kept slave
    against every segment; with many, the segments binned into cells
    (``_cells``) and each slave against its own cell's segments.

@@ -19,7 +19,9 @@ from jaxcontact._assemble import (
     in_stages,
 )
 from jaxcontact._geometry import first_hit_time, squared_distance
-from jaxcontact._search import lowest_score, one_scene_at_a_time
+from jaxcontact._inputs import Segments
+from jaxcontact._narrow import search_all, vmapped
+from jaxcontact._search import one_scene_at_a_time
 from jaxcontact._types import Array, Contact, Crossing, Surface
 
 
@@ -73,17 +75,12 @@ def _search_all(kernel, rows, segments, slave_ok, assemble):
 
 def _lowest(kernel, rows, start, end, segment_ok, slave_ok):
     """i32[N]: per row, the segment of lowest ``kernel``; -1 if no row is real."""
-    pair_value = jax.vmap(kernel, in_axes=(0,) * len(rows) + (None, None))
-
-    def score(k):
-        value = jnp.where(segment_ok[k], pair_value(*rows, start[k], end[k]), jnp.inf)
-        return value, jnp.broadcast_to(k, value.shape)
+    segments = Segments(start, end, segment_ok, None, 0)
 
     def search(_):
-        return lowest_score(score, segment_ok.shape[0], slave_ok.shape[0], start.dtype)
+        return search_all(vmapped(kernel, *rows), segments, slave_ok.shape[0], start.dtype)
 
-    no_choice = jnp.full(slave_ok.shape, -1, jnp.int32)
-    return in_stages(jnp.any(slave_ok), [search], [no_choice])
+    return in_stages(jnp.any(slave_ok), [search], [jnp.full(slave_ok.shape, -1, jnp.int32)])
 
 
 # Compiled as one program even when called outside jit: op by op, the unrolled

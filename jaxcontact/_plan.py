@@ -76,6 +76,7 @@ def plan_buckets(
     block_size: int = 64,
     use_cells: bool | None = None,
     cell_factor: float = 1.0,
+    cell_size: float | None = None,
 ) -> BucketPlan:
     """Sizes a bucket sort for this configuration, with room to spare.
 
@@ -93,6 +94,8 @@ def plan_buckets(
         ``DENSE_LIMIT`` segments.
       cell_factor: cell edge as a multiple of (twice the search distance plus
         the median segment extent).
+      cell_size: the cell edge itself, instead of one chosen from the data
+        (``plan_batch`` sizes every scene of a batch at one edge).
 
     Returns:
       A ``BucketPlan``.
@@ -105,6 +108,8 @@ def plan_buckets(
         raise ValueError(f"slack must be >= 1; got {slack}")
     if not cell_factor > 0:
         raise ValueError(f"cell_factor must be > 0; got {cell_factor}")
+    if cell_size is not None and not (math.isfinite(cell_size) and cell_size > 0):
+        raise ValueError(f"cell_size must be finite and > 0; got {cell_size}")
     x = _inputs.check_points("x", x)
     mask = _inputs.check_mask("mask", mask, x.shape[0])
     surface = _inputs.check_surface(surface, x.dtype)
@@ -151,11 +156,12 @@ def plan_buckets(
     high = np.minimum(np.asarray(master.high), points.max(axis=0))
     extent = np.maximum(high - low, 0.0)
     lengths = np.abs(np.asarray(segments.end) - np.asarray(segments.start))[ok].max(axis=-1)
-    cell_size = cell_factor * (2 * float(reach) + float(np.median(lengths)))
-    # Keep the grid O(slaves kept): no more cells than 4 per kept slave.
-    most_cells = max(64, 4 * len(points))
-    while np.prod(np.ceil(extent * slack / cell_size) + 1) > most_cells:
-        cell_size *= 1.25
+    if cell_size is None:
+        cell_size = cell_factor * (2 * float(reach) + float(np.median(lengths)))
+        # Keep the grid O(slaves kept): no more cells than 4 per kept slave.
+        most_cells = max(64, 4 * len(points))
+        while np.prod(np.ceil(extent * slack / cell_size) + 1) > most_cells:
+            cell_size *= 1.25
     grid_shape = tuple(int(v) for v in np.ceil(extent * slack / cell_size).astype(int) + 1)
     widths = (np.asarray(boxes.high) - np.asarray(boxes.low))[ok]
     span = tuple(int(math.ceil(w * slack / cell_size)) + 1 for w in widths.max(axis=0))
@@ -190,6 +196,8 @@ def replan(plan: BucketPlan, x: Array, surface: Surface, **kwargs) -> BucketPlan
     kwargs = {"block_size": plan.block_size, "use_cells": plan.use_cells, **kwargs}
     fresh = plan_buckets(x, surface, **kwargs)
     fresh = dataclasses.replace(fresh, use_cells=fresh.use_cells or plan.use_cells)
+    if fresh.cell_size == 0:  # nothing to bin now: keep the cells measured before
+        fresh = dataclasses.replace(fresh, cell_size=plan.cell_size)
     if fresh.for_paths != plan.for_paths or not plan.use_cells:
         return dataclasses.replace(
             fresh, block_capacity=max(fresh.block_capacity, plan.block_capacity)

@@ -15,6 +15,8 @@ many (``jax.distributed.initialize`` first; see the README).
 
 from __future__ import annotations
 
+import dataclasses
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -23,7 +25,7 @@ from jax.sharding import PartitionSpec as P
 
 from jaxcontact import _inputs
 from jaxcontact._bucket import _contact_jit, _crossing_jit
-from jaxcontact._plan import BucketPlan, plan_buckets, replan
+from jaxcontact._plan import BucketPlan, plan_buckets
 from jaxcontact._types import Array, Contact, Surface
 
 
@@ -52,8 +54,8 @@ def plan_batch(
       **kwargs: further arguments of ``plan_buckets`` (``slack``, ``block_size``, ...).
 
     Returns:
-      A ``BucketPlan`` with which no scene of the batch overflows, for
-      ``jax.vmap(lambda x, s: bucket_sort(x, s, radius=r, plan=plan))``.
+      A ``BucketPlan`` with which no scene of the batch overflows (checked by
+      running each), for ``jax.vmap(lambda x, s: bucket_sort(x, s, radius=r, plan=plan))``.
     """
     x = np.asarray(x)
     if x.ndim != 3 or x.shape[-1] != 2:
@@ -64,26 +66,36 @@ def plan_batch(
         own = surface if shared else jax.tree.map(lambda leaf, i=index: leaf[i], surface)
         scenes.append((x[index], own, _scene(x_prev, index), _scene(mask, index)))
 
-    def plan_for(scene, previous=None):
+    def plan_for(scene, **sizes):
         points, own, before, rows = scene
         where = {"radius": radius} if x_prev is None else {"x_prev": before}
-        if previous is None:
-            return plan_buckets(points, own, mask=rows, **where, **kwargs)
-        return replan(previous, points, own, mask=rows, **where, **kwargs)
+        return plan_buckets(points, own, mask=rows, **where, **kwargs, **sizes)
 
-    plan = None
-    for scene in scenes:
-        plan = plan_for(scene, plan)
-    # The largest sizes of all, with the last scene's cell edge: check every
-    # scene and grow the plan where one overflows (a few rounds at most; each
-    # replan only grows).
-    for _ in range(len(scenes) + 1):
-        overflowing = [scene for scene in scenes if _overflows(plan, scene, radius)]
-        if not overflowing:
-            return plan
-        for scene in overflowing:
-            plan = plan_for(scene, plan)
+    # Each scene's own plan, then every scene measured again at one cell edge
+    # (the largest chosen), so that the largest of each size holds for all.
+    alone = [plan_for(scene) for scene in scenes]
+    edge = max(plan.cell_size for plan in alone)
+    plans = [plan_for(scene, cell_size=edge) for scene in scenes] if edge > 0 else alone
+    plan = plans[0]
+    for other in plans[1:]:
+        plan = _largest(plan, other)
+    stuck = [index for index, scene in enumerate(scenes) if _overflows(plan, scene, radius)]
+    if stuck:
+        raise RuntimeError(f"plan_batch: scenes {stuck} overflow the merged plan {plan}")
     return plan
+
+
+def _largest(first: BucketPlan, second: BucketPlan) -> BucketPlan:
+    """Each size the larger of two plans' (measured at the same cell edge)."""
+    return dataclasses.replace(
+        first,
+        block_capacity=max(first.block_capacity, second.block_capacity),
+        use_cells=first.use_cells or second.use_cells,
+        grid_shape=tuple(map(max, first.grid_shape, second.grid_shape)),
+        cell_size=max(first.cell_size, second.cell_size),
+        span=tuple(map(max, first.span, second.span)),
+        cell_capacity=max(first.cell_capacity, second.cell_capacity),
+    )
 
 
 def _overflows(plan: BucketPlan, scene, radius) -> bool:

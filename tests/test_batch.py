@@ -49,8 +49,8 @@ def test_one_plan_for_a_batch_of_contacts_equals_a_loop(use_cells):
     scenes, _, x, surface, mask = _batch()
     plan = plan_batch(x, surface, radius=RADIUS, mask=mask, use_cells=use_cells)
     # The batch plan is at least as large as any scene's own.
-    for scene in scenes:
-        own = plan_buckets(scene.x, scene.surface, radius=RADIUS, use_cells=use_cells)
+    for i, scene in enumerate(scenes):
+        own = plan_buckets(scene.x, scene.surface, radius=RADIUS, mask=mask[i], use_cells=use_cells)
         assert plan.block_capacity >= own.block_capacity
     detect = jax.jit(jax.vmap(lambda x, s, m: bucket_sort(x, s, radius=RADIUS, mask=m, plan=plan)))
     batched = detect(x, surface, mask)
@@ -141,3 +141,68 @@ def test_a_plan_with_nothing_near_still_records_cells_for_many_segments():
     assert plan_buckets(far, scene.surface, radius=scene.radius).use_cells
     plan = plan_batch(jnp.stack([far, scene.x]), scene.surface, radius=scene.radius)
     assert plan.use_cells
+
+
+@pytest.mark.parametrize("detector", ["all_to_all", "bucket_sort"])
+def test_gradients_through_a_vmapped_detector_equal_a_loop(detector):
+    # The searches run through custom_vmap (scene by scene) on stop_gradient
+    # inputs; the gradients must still reach x and the master nodes.
+    base = rough_die_scene(1_500, 120, dtype=jnp.float64)
+    scenes = [base, base._replace(x=base.x.at[:, 1].add(0.01))]
+    radius = scenes[0].radius
+    x = jnp.stack([s.x for s in scenes])
+    surface = Surface(
+        jnp.stack([s.surface.nodes for s in scenes]),
+        jnp.stack([s.surface.segments for s in scenes]),
+    )
+    if detector == "bucket_sort":
+        plan = plan_batch(x, surface, radius=radius)
+        assert plan.use_cells
+
+        def detect(x, s):
+            return bucket_sort(x, s, radius=radius, plan=plan)
+    else:
+
+        def detect(x, s):
+            return all_to_all(x, s, radius=radius)
+
+    def energy(x, nodes, segments):
+        contact = detect(x, Surface(nodes, segments))
+        return jnp.sum(jnp.where(contact.found, contact.gap**2, 0))
+
+    batched = jax.jit(jax.vmap(jax.grad(energy, argnums=(0, 1))))(
+        x, surface.nodes, surface.segments
+    )
+    for i in range(len(scenes)):
+        single = jax.grad(energy, argnums=(0, 1))(x[i], surface.nodes[i], surface.segments[i])
+        assert float(jnp.abs(single[0]).sum()) > 0 and float(jnp.abs(single[1]).sum()) > 0
+        for got, want in zip(batched, single, strict=True):
+            np.testing.assert_allclose(got[i], want, rtol=1e-10, atol=1e-12)
+
+
+def test_nested_vmap_equals_a_double_loop():
+    scenes, _, x, surface, _ = _batch()
+    grid = jnp.stack([x, x[:, ::-1]])  # (2, B, N, 2): the same scenes, rows reversed
+    inner = jax.vmap(lambda x, s: all_to_all(x, s, radius=RADIUS), (0, 0))
+    outer = jax.jit(jax.vmap(inner, (0, None)))(grid, surface)
+    for j in range(2):
+        for i, scene in enumerate(scenes):
+            one = all_to_all(grid[j, i], scene.surface, radius=RADIUS)
+            np.testing.assert_array_equal(outer.segment[j, i], one.segment)
+            np.testing.assert_array_equal(outer.gap[j, i], one.gap)
+
+
+def test_searches_batch_as_usual_off_the_cpu(monkeypatch):
+    # On an accelerator the searches are vmapped like everything else; the
+    # answer is the same. (The backend is faked: CI has only a CPU.)
+    import jaxcontact._search
+
+    scenes, x_prev, x, surface, mask = _batch()
+    expected = jax.vmap(lambda x, s, m: all_to_all(x, s, radius=RADIUS, mask=m))(x, surface, mask)
+    paths = jax.vmap(lambda p, x, s: swept(p, x, s))(x_prev, x, surface)
+    monkeypatch.setattr(jaxcontact._search.jax, "default_backend", lambda: "gpu")
+    got = jax.vmap(lambda x, s, m: all_to_all(x, s, radius=RADIUS, mask=m))(x, surface, mask)
+    np.testing.assert_array_equal(got.segment, expected.segment)
+    np.testing.assert_array_equal(got.gap, expected.gap)
+    got_paths = jax.vmap(lambda p, x, s: swept(p, x, s))(x_prev, x, surface)
+    np.testing.assert_array_equal(got_paths.t, paths.t)

@@ -157,9 +157,13 @@ def test_segment_index_out_of_range_under_jit_is_not_a_segment(bad):
     segments = jnp.asarray([[0, 1], bad], jnp.int32)
     surface = SURFACE._replace(segments=segments)
     only_good = Surface(SURFACE.nodes, segments[:1])
+    plan = jaxcontact.plan_buckets(X, SURFACE, radius=2.0)
+    paths = jaxcontact.plan_buckets(X, SURFACE, x_prev=X[::-1])
     for detect in (
         jax.jit(lambda s: jaxcontact.all_to_all(X, s, radius=2.0)),
         jax.jit(lambda s: jaxcontact.swept(X, X[::-1], s)),
+        jax.jit(lambda s: jaxcontact.bucket_sort(X, s, radius=2.0, plan=plan)),
+        jax.jit(lambda s: jaxcontact.bucket_swept(X[::-1], X, s, plan=paths)),
     ):
         got, expected = detect(surface), detect(only_good)
         for field, value in zip(got._fields, got, strict=True):

@@ -36,7 +36,7 @@ def mesh():
     return jax.make_mesh((DEVICES,), ("slaves",))
 
 
-# 1,100 rows split evenly; 1,102 (cutting_scene rounds to a grid) need padding.
+# cutting_scene rounds to a grid: 992 rows split evenly, 1,105 need padding.
 SIZES = [1_000, 1_100]
 
 
@@ -138,3 +138,14 @@ def test_gradients_through_the_sharded_detector_equal_one_device(mesh):
     split = jax.jit(jax.grad(functools.partial(energy, detect=sharded(all_to_all, mesh))))(scene.x)
     assert float(jnp.abs(one).sum()) > 0
     np.testing.assert_allclose(split, one, rtol=1e-12, atol=1e-15)
+
+
+@pytest.mark.parametrize("num_rows", [0, 3])
+def test_fewer_rows_than_devices(mesh, num_rows):
+    scene = _scene(1_000)
+    x = scene.x[:num_rows].at[:, 1].set(4.95) if num_rows else scene.x[:0]
+    one = all_to_all(x, scene.surface, radius=RADIUS)
+    got = jax.jit(sharded(all_to_all, mesh))(x, scene.surface, radius=RADIUS)
+    assert got.gap.shape == (num_rows,)
+    for field, value in zip(one._fields, one, strict=True):
+        np.testing.assert_array_equal(getattr(got, field), value, err_msg=field)
