@@ -192,13 +192,13 @@ def sharded(detector, mesh: Mesh, *, axis: str | None = None):
         static = {k: v for k, v in kwargs.items() if v is None or isinstance(v, BucketPlan)}
         arrays = {k: v for k, v in kwargs.items() if k not in static}
 
-        def local(surface, arrays, rows, *points):
-            result = detector(*points, surface, mask=rows, **arrays, **static)
-            anywhere = jax.lax.psum(result.overflow.astype(jnp.int32), axis) > 0
-            return result._replace(overflow=anywhere)
-
         def on_one_device(surface, arrays, rows, *points):
             return detector(*points, surface, mask=rows, **arrays, **static)
+
+        def local(*args):
+            result = on_one_device(*args)
+            anywhere = jax.lax.psum(result.overflow.astype(jnp.int32), axis) > 0
+            return result._replace(overflow=anywhere)
 
         per_device = total // num_shards
         one_device = [jax.ShapeDtypeStruct((per_device,) + v.shape[1:], v.dtype) for v in points]
