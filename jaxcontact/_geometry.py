@@ -88,12 +88,6 @@ def _offset(x: Array, a: Array, b: Array) -> tuple[Array, Array, Array, Array]:
     return offset, point, xi, ~before & ~after
 
 
-def closeness(x: Array, a: Array, b: Array) -> tuple[Array, Array, Array]:
-    """``(|x - p|^2, (x - p) . n, xi)``, as ``project`` computes them, for settling ties."""
-    offset, _, xi, _ = _offset(x, a, b)
-    return dot(offset, offset), dot(offset, unit_normal(a, b)), xi
-
-
 def squared_distance(x: Array, a: Array, b: Array) -> Array:
     """f[]: ``|x - p|^2``, the number ``project(x, a, b).distance_squared`` holds."""
     offset = _offset(x, a, b)[0]

@@ -54,7 +54,8 @@ def scatter_blocks(result, blocks: Blocks, empty, block_size: int):
 
 
 def search_all(pair_value, segments: Segments, num_rows: int, dtype) -> Array:
-    """i32[S]: each kept slave against every segment (for few segments)."""
+    """i32[S]: each row against every segment (``all_to_all``, ``swept``, and
+    the bucket sort's kept slaves when there are few segments)."""
 
     def score(k):
         value = pair_value(segments.start[k], segments.end[k])
