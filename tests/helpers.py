@@ -220,6 +220,38 @@ def pad_scene(scene: Scene, fill: float):
     return padded, slave_rows, segment_rows
 
 
+def everything_masked(masked: str) -> Scene:
+    """A random scene with every slave (``"slaves"``) or segment (``"segments"``) masked."""
+    scene = random_scene(3, 9, 5, masked=True)
+    if masked == "slaves":
+        return scene._replace(slave_mask=np.zeros(9, bool))
+    return scene._replace(seg_mask=np.zeros(5, bool))
+
+
+def assert_padding_leaves_real_rows_unchanged(checked_scene, fill: float, fields, flag: str):
+    """Padding a random scene with ``fill`` rows changes none of its real rows.
+
+    ``checked_scene`` runs a detector on a scene and checks it against the
+    oracle (and that every output is finite); ``fields`` are compared row by
+    row, segments through the padding's renumbering; padded rows must have
+    ``flag`` False and segment -1. Some real slaves and segments are masked
+    too (finite, as real data).
+    """
+    scene = random_scene(5, 9, 5, masked=True)
+    plain = checked_scene(scene)
+    padded_scene, slave_rows, segment_rows = pad_scene(scene, fill)
+    padded = checked_scene(padded_scene)
+    segment = np.asarray(plain.segment)
+    mapped = np.where(segment >= 0, segment_rows[np.maximum(segment, 0)], -1)
+    np.testing.assert_array_equal(padded.segment[slave_rows], mapped)
+    for field in fields:
+        np.testing.assert_array_equal(getattr(padded, field)[slave_rows], getattr(plain, field))
+    padding = np.ones(len(padded_scene.x), bool)
+    padding[slave_rows] = False
+    assert not getattr(padded, flag)[padding].any()
+    np.testing.assert_array_equal(padded.segment[padding], -1)
+
+
 # Every hand-made scene of the special-case tests is padded to this one
 # capacity (slaves, nodes, segments), so that they all share one compiled
 # program per dtype: each distinct shape costs the suite about a second of XLA

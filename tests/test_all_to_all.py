@@ -235,11 +235,7 @@ def test_only_zero_length_segments_find_nothing():
 
 @pytest.mark.parametrize("masked", ["slaves", "segments"])
 def test_everything_masked_finds_nothing(masked):
-    scene = helpers.random_scene(3, 9, 5, masked=True)
-    if masked == "slaves":
-        scene = scene._replace(slave_mask=np.zeros(9, bool))
-    else:
-        scene = scene._replace(seg_mask=np.zeros(5, bool))
+    scene = helpers.everything_masked(masked)
     contact = checked_scene(scene._replace(radius=100.0))
     assert not contact.found.any() and not contact.active.any()
     np.testing.assert_array_equal(contact.segment, np.full(9, -1))
@@ -249,20 +245,9 @@ def test_everything_masked_finds_nothing(masked):
 
 @pytest.mark.parametrize("fill", [np.nan, np.inf, -np.inf], ids=["nan", "inf", "-inf"])
 def test_nan_and_inf_padding_leaves_real_rows_unchanged(fill):
-    # Some real slaves and segments are masked too (finite, as real data).
-    scene = helpers.random_scene(5, 9, 5, masked=True)
-    plain = checked_scene(scene)
-    padded_scene, slave_rows, segment_rows = helpers.pad_scene(scene, fill)
-    padded = checked_scene(padded_scene)  # also asserts every output is finite
-    segment = np.asarray(plain.segment)
-    mapped = np.where(segment >= 0, segment_rows[np.maximum(segment, 0)], -1)
-    np.testing.assert_array_equal(padded.segment[slave_rows], mapped)
-    for field in ("gap", "xi", "point", "normal", "found", "active"):
-        np.testing.assert_array_equal(getattr(padded, field)[slave_rows], getattr(plain, field))
-    padding = np.ones(len(padded_scene.x), bool)
-    padding[slave_rows] = False
-    assert not padded.found[padding].any()
-    np.testing.assert_array_equal(padded.segment[padding], -1)
+    helpers.assert_padding_leaves_real_rows_unchanged(
+        checked_scene, fill, ("gap", "xi", "point", "normal", "found", "active"), "found"
+    )
 
 
 @DTYPES
