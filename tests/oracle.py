@@ -96,6 +96,33 @@ def closest_point(x, a, b):
     return _dot(offset, offset), xi_free, xi, point
 
 
+def _prefer_outside(slave, nearest, candidates, ends):
+    """The README's tie rule (where jaxcontact deviates from API.md).
+
+    Where the nearest segment's closest point is its start (end) node, the
+    lowest-index real segment that ends (starts) at that same node index ties
+    with it; it is taken if its signed normal distance (x - p) . n is
+    strictly larger, compared exactly through s |s| / |d|^2 of
+    s = (x - p) . n |d|. Only neighbours sharing the node index count.
+    """
+    (k, _, _), (_, xi_free, _, _) = nearest
+    if 0 < xi_free < 1:
+        return nearest
+    at_end = xi_free >= 1
+    node = ends[k][1] if at_end else ends[k][0]
+    rivals = [c for c in candidates if c[0][0] != k and ends[c[0][0]][0 if at_end else 1] == node]
+    if not rivals:
+        return nearest
+
+    def outward(candidate):
+        (_, a, b), (_, _, _, point) = candidate
+        d = _sub(b, a)
+        side = _cross(_sub(slave, point), d)
+        return side * abs(side) / _dot(d, d)
+
+    return rivals[0] if outward(rivals[0]) > outward(nearest) else nearest
+
+
 def oracle_contact(x, nodes, segments, seg_mask=None, slave_mask=None, radius=0.0) -> OracleContact:
     """The ``Contact`` API.md describes, by looping over every pair."""
     slaves = _rows(x)
@@ -116,18 +143,12 @@ def oracle_contact(x, nodes, segments, seg_mask=None, slave_mask=None, radius=0.
             continue  # masked: the row may be padding (NaN, inf), never read
         slave = _exact(row)
 
-        # Nearest first; of exactly equal distances (a shared vertex), the one
-        # with the larger signed normal distance (x - p) . n (README: ties),
-        # compared exactly through the monotone s |s| of s = (x - p) . n |d|,
-        # over |d|^2; min() keeps the first of equal keys: then the lower index.
-        def rank(candidate, slave=slave):
-            (_, a, b), (distance_squared, _, _, point) = candidate
-            d = _sub(b, a)
-            side = _cross(_sub(slave, point), d)
-            return distance_squared, -side * abs(side) / _dot(d, d)
-
-        (k, a, b), (distance_squared, xi_free, xi, point) = min(
-            ((segment, closest_point(slave, *segment[1:])) for segment in real), key=rank
+        candidates = [(segment, closest_point(slave, *segment[1:])) for segment in real]
+        # Nearest; of exactly equal distances the lower index (min keeps the
+        # first), then the README's vertex-tie rule.
+        nearest = min(candidates, key=lambda candidate: candidate[1][0])
+        (k, a, b), (distance_squared, xi_free, xi, point) = _prefer_outside(
+            slave, nearest, candidates, np.asarray(segments).reshape(-1, 2)
         )
         if distance_squared > radius_squared:
             continue
@@ -193,3 +214,85 @@ def oracle_crossing(x_prev, x, nodes, segments, seg_mask=None, slave_mask=None) 
         result.t[i], result.segment[i], result.crossed[i] = float(t), k, True
         result.point[i] = _floats(_add_scaled(start, t, _sub(end, start)))
     return result
+
+
+# Per-pair exact quantities for the property tests (tests/test_properties.py),
+# which need more than the winner: how far every other segment is, and how
+# close each decision was to going the other way.
+
+
+class ExactPair(NamedTuple):
+    """One (slave, real segment) pair in exact arithmetic."""
+
+    segment: int
+    distance_squared: Fraction  # |x - p|^2
+    point: tuple[Fraction, Fraction]  # the closest point p
+    scale: float  # |x - a| + |b - a|: the size the float error scales with
+    length: float  # |b - a|
+    at_end: bool  # p is an end point of the segment
+    normal_distance: float  # (x - p) . n, the vertex-tie key
+
+
+def exact_pairs(x_row, nodes, segments, seg_mask=None) -> list[ExactPair]:
+    """Every real segment's exact closest point to the slave ``x_row`` (f[2])."""
+    slave = _exact(x_row)
+    pairs = []
+    for k, a, b in _real_segments(nodes, segments, seg_mask):
+        distance_squared, _, xi, point = closest_point(slave, a, b)
+        d, from_a = _sub(b, a), _sub(slave, a)
+        length = math.sqrt(float(_dot(d, d)))
+        scale = math.sqrt(float(_dot(from_a, from_a))) + length
+        side = float(_cross(_sub(slave, point), d)) / length
+        pairs.append(ExactPair(k, distance_squared, point, scale, length, xi in (0, 1), side))
+    return pairs
+
+
+class ExactMeeting(NamedTuple):
+    """One (path, real segment) pair in exact arithmetic."""
+
+    segment: int
+    t: Fraction | None  # first meeting time, None if the path misses the segment
+    orientations: tuple[float, ...]  # the four orientation tests, each over its bound scale
+    conditioning: float  # d t / d (orientation): the scale of t's rounding error
+
+
+def exact_meetings(start_row, end_row, nodes, segments, seg_mask=None) -> list[ExactMeeting]:
+    """Every real segment's exact meeting with the path ``start_row -> end_row``.
+
+    ``orientations`` are the cross products the crossing decision is made of
+    (the path's ends against the segment's line, the segment's ends against
+    the path's line), each divided by the product of the lengths it is made
+    from: in floating point each is computed with an error of a few ulps of
+    that product, so a ratio within a few eps of zero may take either sign.
+    """
+    start, end = _exact(start_row), _exact(end_row)
+    u = _sub(end, start)
+    length_u = math.sqrt(float(_dot(u, u)))
+    meetings = []
+    for k, a, b in _real_segments(nodes, segments, seg_mask):
+        d = _sub(b, a)
+        length_d = math.sqrt(float(_dot(d, d)))
+
+        def norm(v):
+            return math.sqrt(float(_dot(v, v)))
+
+        def ratio(value, scale):
+            return abs(float(value)) / scale if scale > 0 else math.inf
+
+        from_start, from_end = _sub(start, a), _sub(end, a)
+        orientations = (
+            ratio(_cross(d, from_start), length_d * norm(from_start)),
+            ratio(_cross(d, from_end), length_d * norm(from_end)),
+            ratio(_cross(u, _sub(a, start)), length_u * norm(_sub(a, start))),
+            ratio(_cross(u, _sub(b, start)), length_u * norm(_sub(b, start))),
+        )
+        # t is a ratio of orientations (crossing the line) or of projections
+        # on the path (through an end point, along the line): its error is a
+        # few eps times these conditionings.
+        turn = abs(float(_cross(u, d)))
+        reach = norm(from_start) + norm(from_end) + length_d
+        conditioning = length_d * reach / turn if turn else 0.0
+        conditioning += reach / length_u if length_u else 0.0
+        meeting = first_meeting(start, end, a, b)
+        meetings.append(ExactMeeting(k, meeting, orientations, conditioning))
+    return meetings
