@@ -17,5 +17,6 @@ from jaxcontact._shard import sharded as sharded
 from jaxcontact._types import Contact as Contact
 from jaxcontact._types import Crossing as Crossing
 from jaxcontact._types import Surface as Surface
+from jaxcontact._validate import validate as validate
 
 __version__ = "0.1.0"

@@ -168,3 +168,118 @@ def test_segment_index_out_of_range_under_jit_is_not_a_segment(bad):
         got, expected = detect(surface), detect(only_good)
         for field, value in zip(got._fields, got, strict=True):
             np.testing.assert_array_equal(value, getattr(expected, field), err_msg=field)
+
+
+# Every public detector, plain and under jit (the bucket ones with a plan made
+# for the good inputs), for the bad inputs the issue lists.
+def _detectors(transform):
+    plan = jaxcontact.plan_buckets(X, SURFACE, radius=0.5)
+    paths = jaxcontact.plan_buckets(X, SURFACE, x_prev=X)
+    jit_plan = {"plan": plan} if transform is jax.jit else {}
+    jit_paths = {"plan": paths} if transform is jax.jit else {}
+    return {
+        "all_to_all": lambda x, s, m=None: jaxcontact.all_to_all(x, s, radius=0.5, mask=m),
+        "bucket_sort": lambda x, s, m=None: jaxcontact.bucket_sort(
+            x, s, radius=0.5, mask=m, **jit_plan
+        ),
+        "swept": lambda x, s, m=None: jaxcontact.swept(x, x, s, mask=m),
+        "bucket_swept": lambda x, s, m=None: jaxcontact.bucket_swept(x, x, s, mask=m, **jit_paths),
+    }
+
+
+DETECTORS = pytest.mark.parametrize(
+    "detector", ["all_to_all", "bucket_sort", "swept", "bucket_swept"]
+)
+
+# (argument the message must start with, x, surface, mask) of each bad call.
+BAD_FOR_EVERY_DETECTOR = {
+    "x_rank_3": ("x", X[None], SURFACE, None),
+    "x_trailing_1": ("x", X[:, :1], SURFACE, None),
+    "x_integer": ("x", X.astype(np.int32), SURFACE, None),
+    "x_complex": ("x", X.astype(np.complex64), SURFACE, None),
+    # Half precision looks like a float but the error bounds are not for it.
+    "x_float16": ("x", X.astype(np.float16), SURFACE, None),
+    "nodes_complex": ("surface.nodes", X, SURFACE._replace(nodes=NODES + 0j), None),
+    "segments_trailing_3": (
+        "surface.segments",
+        X,
+        SURFACE._replace(segments=np.zeros((2, 3), np.int32)),
+        None,
+    ),
+    "surface_mask_float": ("surface.mask", X, SURFACE._replace(mask=np.ones(2)), None),
+    "mask_wrong_length": ("mask", X, SURFACE, np.ones(3, bool)),
+    "mask_integer": ("mask", X, SURFACE, np.ones(2, np.int32)),
+}
+
+
+@TRANSFORMS
+@DETECTORS
+@pytest.mark.parametrize("case", list(BAD_FOR_EVERY_DETECTOR))
+def test_every_detector_names_the_bad_argument(case, detector, transform):
+    name, x, surface, mask = BAD_FOR_EVERY_DETECTOR[case]
+    call = _detectors(transform)[detector]
+    if name == "x" and detector.endswith("swept"):
+        name = "x_prev"  # the bad x is passed as both ends of the paths
+    with pytest.raises(ValueError, match=rf"^{re.escape(name)}\b(?!\.)"):
+        transform(call)(x, surface, mask)
+
+
+@DETECTORS
+@pytest.mark.parametrize("bad", [[[0, 1], [1, 3]], [[0, 1], [-1, 2]]], ids=["high", "negative"])
+def test_every_detector_rejects_concrete_segment_indices_out_of_range(detector, bad):
+    surface = SURFACE._replace(segments=np.asarray(bad, np.int32))
+    with pytest.raises(ValueError, match=r"^surface\.segments\b"):
+        _detectors(lambda f: f)[detector](X, surface)
+
+
+@pytest.mark.parametrize("radius", [-1.0, np.nan, np.inf])
+@pytest.mark.parametrize("detector", ["bucket_sort", "plan_buckets", "find_candidates"])
+def test_bucket_functions_reject_bad_radius(detector, radius):
+    plan = jaxcontact.plan_buckets(X, SURFACE, radius=0.5)
+    calls = {
+        "bucket_sort": lambda: jaxcontact.bucket_sort(X, SURFACE, radius=radius),
+        "plan_buckets": lambda: jaxcontact.plan_buckets(X, SURFACE, radius=radius),
+        "find_candidates": lambda: jaxcontact.find_candidates(
+            X, SURFACE, radius=radius, skin=0.1, plan=plan
+        ),
+    }
+    with pytest.raises(ValueError, match=r"^radius\b"):
+        calls[detector]()
+
+
+EMPTY = Surface(jnp.zeros((0, 2)), jnp.zeros((0, 2), jnp.int32))
+
+
+@TRANSFORMS
+@DETECTORS
+@pytest.mark.parametrize("empty", ["slaves", "segments", "both"])
+def test_every_detector_takes_empty_inputs(empty, detector, transform):
+    x = X[:0] if empty in ("slaves", "both") else X
+    surface = EMPTY if empty in ("segments", "both") else SURFACE
+    if transform is jax.jit and detector.startswith("bucket"):
+        # The plan is made for the shapes at hand.
+        kind = {"radius": 0.5} if detector == "bucket_sort" else {"x_prev": x}
+        plan = jaxcontact.plan_buckets(x, surface, **kind)
+        call = {
+            "bucket_sort": lambda x, s: jaxcontact.bucket_sort(x, s, radius=0.5, plan=plan),
+            "bucket_swept": lambda x, s: jaxcontact.bucket_swept(x, x, s, plan=plan),
+        }[detector]
+    else:
+        call = _detectors(transform)[detector]
+    result = transform(call)(x, surface)
+    assert result.segment.shape == (len(x),)
+    assert (np.asarray(result.segment) == -1).all()
+    assert not bool(result.overflow)
+    for value in result:
+        assert np.isfinite(np.asarray(value, np.float64)).all()
+
+
+def test_numpy_float64_inputs_with_x64_off_are_computed_in_float32():
+    # Regression: with x64 off, x (NumPy float64) became float32 but the
+    # nodes (NumPy float64) were compared as float64, so a plain NumPy call
+    # raised "must have the slaves' dtype float32; got ... float32".
+    with jax.enable_x64(False):
+        contact = jaxcontact.all_to_all(X, Surface(NODES, SEGMENTS), radius=0.5)
+        crossing = jaxcontact.swept(X, X[::-1], Surface(NODES, SEGMENTS))
+    assert contact.gap.dtype == np.float32 and crossing.t.dtype == np.float32
+    assert bool(contact.found[0]) and bool(crossing.crossed.any())
