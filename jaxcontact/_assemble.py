@@ -13,7 +13,7 @@ import jax
 import jax.numpy as jnp
 
 from jaxcontact._cells import stable_order
-from jaxcontact._geometry import dot, path_hit, project, unit_normal
+from jaxcontact._geometry import cross, dot, path_hit, project, unit_normal
 from jaxcontact._inputs import Segments
 from jaxcontact._types import Array, Contact, Crossing
 
@@ -56,8 +56,8 @@ def _on_chosen(kernel, x: Array, segments: Segments, choice: Array):
     return jax.vmap(kernel)(x, segments.start[index], segments.end[index])
 
 
-def prefer_outside(x: Array, segments: Segments, choice: Array) -> Array:
-    """i32[N]: ``choice`` with vertex ties given to the face the slave is outside of.
+def prefer_outside(x: Array, segments: Segments, choice: Array) -> tuple[Array, Array]:
+    """``(choice, inside)``: vertex ties given to the face the slave is outside of.
 
     The search gives exact ties to the lower index. Where the chosen closest
     point is a node shared with the neighbouring segment, both are at the same
@@ -67,6 +67,14 @@ def prefer_outside(x: Array, segments: Segments, choice: Array) -> Array:
     way. API.md gives such ties to the lower index, which reports slaves in
     the blind spot beyond a sharp convex corner (the tool tip) as
     penetrating. Only neighbours that share the node index are seen.
+
+    ``inside`` (bool[N]) marks vertex ties whose gap is negative: the larger
+    normal distance is negative, or zero with the other one negative (a
+    slave on the extension of a face beyond a concave corner is inside the
+    other face; "zero counts positive" would report it outside, a jump of
+    twice the gap across that line). Decided from the signs of the cross
+    products ``(x - v) x d``, which are exact when the inputs' products are,
+    not from the rounded unit normals.
     """
     before, after = vertex_neighbours(segments)
     start, end = segments.start, segments.end
@@ -85,8 +93,12 @@ def prefer_outside(x: Array, segments: Segments, choice: Array) -> Array:
     # it, where it ties exactly in reals). Both then measure from v.
     offset = x - jnp.where(at_end[:, None], b, a)
     outside = jax.vmap(dot)(offset, normal[rival]) > jax.vmap(dot)(offset, normal[index])
-    switch = (choice >= 0) & (other >= 0) & segments.ok[rival] & outside
-    return jnp.where(switch, other, choice)
+    tied = (choice >= 0) & (other >= 0) & segments.ok[rival]
+    own_side = jnp.sign(jax.vmap(cross)(offset, d))
+    rival_side = jnp.sign(jax.vmap(cross)(offset, end[rival] - start[rival]))
+    larger, smaller = jnp.maximum(own_side, rival_side), jnp.minimum(own_side, rival_side)
+    inside = tied & (smaller < 0) & (larger <= 0)
+    return jnp.where(tied & outside, other, choice), inside
 
 
 def in_stages(go: Array, stages, skipped, value=None):
@@ -146,8 +158,10 @@ def contact_from_choice(
         choice = jnp.full(choice.shape, -1, jnp.int32)
         projection = jax.vmap(project)(x, jnp.zeros_like(x), jnp.zeros_like(x))
     else:
-        choice = jax.lax.stop_gradient(prefer_outside(x, segments, choice))
+        choice, inside = jax.lax.stop_gradient(prefer_outside(x, segments, choice))
         projection = _on_chosen(project, x, segments, choice)
+        magnitude = jnp.abs(projection.gap)
+        projection = projection._replace(gap=jnp.where(inside, -magnitude, projection.gap))
     has_choice = row_ok & (choice >= 0)
     found = has_choice & (jnp.abs(projection.gap) <= radius)
 

@@ -121,7 +121,11 @@ def project(x: Array, a: Array, b: Array) -> Projection:
     distance_squared = dot(offset, offset)
     normal = unit_normal(a, b)
     normal_offset = dot(offset, normal)
-    corner_sign = jnp.where(normal_offset < 0, -1, 1).astype(x.dtype)
+    # At an end point the sign comes from the cross product of two input
+    # differences, exact when its products are (a slave on the extension of
+    # the segment's line gets exactly zero: positive), not from the rounded
+    # unit normal, whose dot product can round to -1e-9 there.
+    corner_sign = jnp.where(cross(offset, b - a) < 0, -1, 1).astype(x.dtype)
     gap = jnp.where(interior, normal_offset, corner_sign * safe_sqrt(distance_squared))
     return Projection(distance_squared, gap, xi, point, normal, normal_offset)
 

@@ -242,7 +242,7 @@ def check_contact(contact, scene: Scene, dtype):
     expected = oracle.oracle_contact(
         scene.x, scene.nodes, scene.segments, scene.seg_mask, None, scene.radius
     )
-    for row in range(NUM_SLAVES):
+    for row in range(len(scene.x)):
         pairs = {p.segment: p for p in oracle.exact_pairs(
             scene.x[row], scene.nodes, scene.segments, scene.seg_mask)}  # fmt: skip
         if not pairs:
