@@ -57,7 +57,7 @@ def _on_chosen(kernel, x: Array, segments: Segments, choice: Array):
 
 
 def prefer_outside(x: Array, segments: Segments, choice: Array) -> tuple[Array, Array]:
-    """``(choice, inside)``: vertex ties given to the face the slave is outside of.
+    """``(choice, sign)``: vertex ties given to the face the slave is outside of.
 
     The search gives exact ties to the lower index. Where the chosen closest
     point is a node shared with the neighbouring segment, both are at the same
@@ -68,13 +68,15 @@ def prefer_outside(x: Array, segments: Segments, choice: Array) -> tuple[Array, 
     the blind spot beyond a sharp convex corner (the tool tip) as
     penetrating. Only neighbours that share the node index are seen.
 
-    ``inside`` (bool[N]) marks vertex ties whose gap is negative: the larger
-    normal distance is negative, or zero with the other one negative (a
-    slave on the extension of a face beyond a concave corner is inside the
-    other face; "zero counts positive" would report it outside, a jump of
-    twice the gap across that line). Decided from the signs of the cross
-    products ``(x - v) x d``, which are exact when the inputs' products are,
-    not from the rounded unit normals.
+    ``sign`` (f[N]) is the gap's sign at a vertex tie, 0 elsewhere: -1 when
+    the larger normal distance is negative, or zero with the other one
+    negative (a slave on the extension of a face beyond a concave corner is
+    inside the other face; "zero counts positive" would report it outside, a
+    jump of twice the gap across that line), else +1. Decided from the signs
+    of the cross products ``(x - v) x d`` of both faces, which are exact
+    when the inputs' products are, not from the rounded unit normals: where
+    the two normal distances are equal to within rounding the choice of face
+    may go either way, the sign may not.
     """
     before, after = vertex_neighbours(segments)
     start, end = segments.start, segments.end
@@ -97,8 +99,9 @@ def prefer_outside(x: Array, segments: Segments, choice: Array) -> tuple[Array, 
     own_side = jnp.sign(jax.vmap(cross)(offset, d))
     rival_side = jnp.sign(jax.vmap(cross)(offset, end[rival] - start[rival]))
     larger, smaller = jnp.maximum(own_side, rival_side), jnp.minimum(own_side, rival_side)
-    inside = tied & (smaller < 0) & (larger <= 0)
-    return jnp.where(tied & outside, other, choice), inside
+    inside = (smaller < 0) & (larger <= 0)
+    sign = jnp.where(tied, jnp.where(inside, -1, 1), 0).astype(x.dtype)
+    return jnp.where(tied & outside, other, choice), sign
 
 
 def in_stages(go: Array, stages, skipped, value=None):
@@ -158,10 +161,10 @@ def contact_from_choice(
         choice = jnp.full(choice.shape, -1, jnp.int32)
         projection = jax.vmap(project)(x, jnp.zeros_like(x), jnp.zeros_like(x))
     else:
-        choice, inside = jax.lax.stop_gradient(prefer_outside(x, segments, choice))
+        choice, sign = jax.lax.stop_gradient(prefer_outside(x, segments, choice))
         projection = _on_chosen(project, x, segments, choice)
-        magnitude = jnp.abs(projection.gap)
-        projection = projection._replace(gap=jnp.where(inside, -magnitude, projection.gap))
+        tied_gap = sign * jnp.abs(projection.gap)
+        projection = projection._replace(gap=jnp.where(sign != 0, tied_gap, projection.gap))
     has_choice = row_ok & (choice >= 0)
     found = has_choice & (jnp.abs(projection.gap) <= radius)
 

@@ -136,3 +136,16 @@ def test_segment_order_changes_nothing_but_exact_ties(name, dtype, seed):
     # with the same gap.
     np.testing.assert_array_equal(np.asarray(shuffled.gap), np.asarray(plain.gap))
     check_contact(shuffled, Scene(**{**scene.__dict__, "segments": L_SEGMENTS[order]}), dtype)
+
+
+@NAMES
+def test_slave_beyond_the_tip_of_a_spike_is_outside(name):
+    # Found by the property tests (while fixing the case above): a spike out
+    # and back, (0, 0) -> (0.375, 1.875) -> (0, 0), and a float32 slave in line
+    # beyond its tip. Both faces' normal distances are zero to within rounding
+    # and of opposite signs: either face may be chosen, but the gap must be
+    # positive (the larger normal distance is >= 0), whichever it is.
+    scene = _scene(np.array([[0, 0], [0.375, 1.875], [0, 0]]), np.float32, [[0, 1], [1, 2]])
+    scene.x = np.resize(np.array([[0.91143656, 4.557183]], np.float32), PATHS.shape)
+    gap = np.asarray(_detect(name, scene).gap)
+    np.testing.assert_allclose(gap, 2.7353005, rtol=1e-6)
