@@ -263,7 +263,7 @@ def _table(rows):
     return "\n".join(lines)
 
 
-def _plot(rows, x_key, y_keys, path, title, xlabel, ylabel, group="dtype"):
+def _plot(rows, x_key, y_keys, path, title, xlabel, ylabel, group="dtype", log_y=True):
     import matplotlib
 
     matplotlib.use("Agg")
@@ -274,8 +274,8 @@ def _plot(rows, x_key, y_keys, path, title, xlabel, ylabel, group="dtype"):
         mine = [row for row in rows if row[group] == label]
         for y_key, style in y_keys:
             xs = [max(row[x_key], 1e-1) if x_key == "offset" else row[x_key] for row in mine]
-            ys = [max(row[y_key], 1e-20) for row in mine]
-            axes.loglog(xs, ys, style, label=f"{label}: {y_key}")
+            ys = [max(row[y_key], 1e-20) if log_y else row[y_key] for row in mine]
+            (axes.loglog if log_y else axes.semilogx)(xs, ys, style, label=f"{label}: {y_key}")
     axes.set_title(title)
     axes.set_xlabel(xlabel)
     axes.set_ylabel(ylabel)
@@ -318,7 +318,7 @@ def main(argv=None):
     ties = [dict(row, group=f"{row['dtype']} {row['tie']}") for row in studies["ties"]]
     _plot(ties, "delta", [("wrong_choice_rate", "o-")], out / "stability_ties.png",
           "Segment choices differing from the exact oracle near a tie",
-          "relative distance from the tie", "rate", group="group")  # fmt: skip
+          "relative distance from the tie", "rate", group="group", log_y=False)  # fmt: skip
     print(f"\nCSV and PNG files in {out}")
 
 
