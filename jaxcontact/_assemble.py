@@ -57,26 +57,28 @@ def _on_chosen(kernel, x: Array, segments: Segments, choice: Array):
 
 
 def prefer_outside(x: Array, segments: Segments, choice: Array) -> tuple[Array, Array]:
-    """``(choice, sign)``: vertex ties given to the face the slave is outside of.
+    """``(choice, sign)``: vertex ties given to the face that decides the gap's sign.
 
     The search gives exact ties to the lower index. Where the chosen closest
-    point is a node shared with the neighbouring segment, both are at the same
-    distance, and the one with the larger signed normal distance (x - p) . n
-    is taken instead: outside a convex corner that is the face the slave is
-    outside of (positive gap), inside a concave one a negative gap either
-    way. API.md gives such ties to the lower index, which reports slaves in
-    the blind spot beyond a sharp convex corner (the tool tip) as
-    penetrating. Only neighbours that share the node index are seen.
+    point is a node v shared with the neighbouring segment, both are at the
+    same distance |x - v|, and the slave is outside the master near v when
+    it is outside EITHER face at a convex corner (left turn, or straight on),
+    and only when it is outside BOTH at a concave one (right turn). So the
+    face with the larger signed normal distance (x - v) . n is taken at a
+    convex corner, the smaller at a concave one, and the gap's sign is that
+    face's. API.md gives such ties to the lower index, which reports slaves
+    in the blind spot beyond a sharp convex corner (the tool tip) as
+    penetrating, and slaves inside a sharp concave notch as outside. Only
+    neighbours that share the node index are seen.
 
-    ``sign`` (f[N]) is the gap's sign at a vertex tie, 0 elsewhere: -1 when
-    the larger normal distance is negative, or zero with the other one
-    negative (a slave on the extension of a face beyond a concave corner is
-    inside the other face; "zero counts positive" would report it outside, a
-    jump of twice the gap across that line), else +1. Decided from the signs
-    of the cross products ``(x - v) x d`` of both faces, which are exact
+    ``sign`` (f[N]) is the gap's sign at a vertex tie (+1 or -1; 0 where
+    there is no tie). It is decided from the signs of the cross products
+    ``(x - v) x d`` of both faces and ``d_in x d_out`` of the corner, exact
     when the inputs' products are, not from the rounded unit normals: where
-    the two normal distances are equal to within rounding the choice of face
-    may go either way, the sign may not.
+    the two normal distances are equal to within rounding the choice of
+    face may go either way, the sign may not. (A slave on the extension of
+    a face beyond a concave corner has normal distance 0 to it and is inside
+    the other face: negative, as its neighbours on either side.)
     """
     before, after = vertex_neighbours(segments)
     start, end = segments.start, segments.end
@@ -94,14 +96,21 @@ def prefer_outside(x: Array, segments: Segments, choice: Array) -> tuple[Array, 
     # to rounding (the neighbour's own closest point may round 1e-16 inside
     # it, where it ties exactly in reals). Both then measure from v.
     offset = x - jnp.where(at_end[:, None], b, a)
-    outside = jax.vmap(dot)(offset, normal[rival]) > jax.vmap(dot)(offset, normal[index])
+    rival_d = end[rival] - start[rival]
+    turn = jax.vmap(cross)(
+        jnp.where(at_end[:, None], d, rival_d), jnp.where(at_end[:, None], rival_d, d)
+    )
+    convex = turn >= 0
+    own_key = jax.vmap(dot)(offset, normal[index])
+    rival_key = jax.vmap(dot)(offset, normal[rival])
+    better = jnp.where(convex, rival_key > own_key, rival_key < own_key)
     tied = (choice >= 0) & (other >= 0) & segments.ok[rival]
     own_side = jnp.sign(jax.vmap(cross)(offset, d))
-    rival_side = jnp.sign(jax.vmap(cross)(offset, end[rival] - start[rival]))
+    rival_side = jnp.sign(jax.vmap(cross)(offset, rival_d))
     larger, smaller = jnp.maximum(own_side, rival_side), jnp.minimum(own_side, rival_side)
-    inside = (smaller < 0) & (larger <= 0)
+    inside = jnp.where(convex, larger < 0, smaller < 0)
     sign = jnp.where(tied, jnp.where(inside, -1, 1), 0).astype(x.dtype)
-    return jnp.where(tied & outside, other, choice), sign
+    return jnp.where(tied & better, other, choice), sign
 
 
 def in_stages(go: Array, stages, skipped, value=None):

@@ -97,15 +97,17 @@ def closest_point(x, a, b):
 
 
 def _prefer_outside(slave, nearest, candidates, ends):
-    """The README's tie rule (where jaxcontact deviates from API.md): ``(chosen, sides)``.
+    """The README's tie rule (where jaxcontact deviates from API.md): ``(chosen, sign)``.
 
     Where the nearest segment's closest point is its start (end) node, the
     lowest-index real segment that ends (starts) at that same node index ties
-    with it; it is taken if its signed normal distance (x - p) . n is
-    strictly larger, compared exactly through s |s| / |d|^2 of
+    with it. At a convex corner (``d_in x d_out >= 0``) the one with the
+    larger signed normal distance (x - p) . n is taken, at a concave one the
+    smaller, if strictly so; compared exactly through s |s| / |d|^2 of
     s = (x - p) . n |d|. Only neighbours sharing the node index count.
-    ``sides`` holds both segments' s at such a tie (the gap's sign comes
-    from both), else None.
+    ``sign`` is the gap's sign at such a tie (+-1): negative when the slave
+    is inside either face at a concave corner, inside both at a convex one
+    (zero counts as outside); None without a tie.
     """
     (k, _, _), (_, xi_free, _, _) = nearest
     if 0 < xi_free < 1:
@@ -115,18 +117,26 @@ def _prefer_outside(slave, nearest, candidates, ends):
     rivals = [c for c in candidates if c[0][0] != k and ends[c[0][0]][0 if at_end else 1] == node]
     if not rivals:
         return nearest, None
+    rival = rivals[0]
+
+    def direction(candidate):
+        (_, a, b), _ = candidate
+        return _sub(b, a)
 
     def side(candidate):
         (_, a, b), (_, _, _, point) = candidate
         return _cross(_sub(slave, point), _sub(b, a))
 
-    def outward(candidate):
-        (_, a, b), _ = candidate
-        d = _sub(b, a)
+    def key(candidate):
+        d = direction(candidate)
         return side(candidate) * abs(side(candidate)) / _dot(d, d)
 
-    chosen = rivals[0] if outward(rivals[0]) > outward(nearest) else nearest
-    return chosen, (side(nearest), side(rivals[0]))
+    incoming, outgoing = (nearest, rival) if at_end else (rival, nearest)
+    convex = _cross(direction(incoming), direction(outgoing)) >= 0
+    better = key(rival) > key(nearest) if convex else key(rival) < key(nearest)
+    sides = side(nearest), side(rival)
+    inside = max(sides) < 0 if convex else min(sides) < 0
+    return (rival if better else nearest), (-1 if inside else 1)
 
 
 def oracle_contact(x, nodes, segments, seg_mask=None, slave_mask=None, radius=0.0) -> OracleContact:
@@ -153,7 +163,7 @@ def oracle_contact(x, nodes, segments, seg_mask=None, slave_mask=None, radius=0.
         # Nearest; of exactly equal distances the lower index (min keeps the
         # first), then the README's vertex-tie rule.
         nearest = min(candidates, key=lambda candidate: candidate[1][0])
-        ((k, a, b), (distance_squared, xi_free, xi, point)), sides = _prefer_outside(
+        ((k, a, b), (distance_squared, xi_free, xi, point)), tie_sign = _prefer_outside(
             slave, nearest, candidates, np.asarray(segments).reshape(-1, 2)
         )
         if distance_squared > radius_squared:
@@ -164,12 +174,8 @@ def oracle_contact(x, nodes, segments, seg_mask=None, slave_mask=None, radius=0.
         normal_offset = _cross(_sub(slave, point), d)
         if 0 < xi_free < 1:
             gap = float(normal_offset) / length
-        elif sides is not None:
-            # A vertex tie: negative when the larger normal distance is, or
-            # when it is zero and the other one is negative (on the extension
-            # of a face beyond a concave corner: inside the other face).
-            inside = min(sides) < 0 and max(sides) <= 0
-            gap = math.copysign(math.sqrt(float(distance_squared)), -1 if inside else 1)
+        elif tie_sign is not None:
+            gap = math.copysign(math.sqrt(float(distance_squared)), tie_sign)
         else:
             # Magnitude |x - p|, sign of (x - p) . n; zero counts as positive.
             gap = math.copysign(math.sqrt(float(distance_squared)), -1 if normal_offset < 0 else 1)

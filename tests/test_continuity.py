@@ -149,3 +149,22 @@ def test_slave_beyond_the_tip_of_a_spike_is_outside(name):
     scene.x = np.resize(np.array([[0.91143656, 4.557183]], np.float32), PATHS.shape)
     gap = np.asarray(_detect(name, scene).gap)
     np.testing.assert_allclose(gap, 2.7353005, rtol=1e-6)
+
+
+@DTYPES
+@NAMES
+def test_slaves_inside_a_sharp_concave_notch_are_inside(name, dtype):
+    # Regression: at a concave corner turning by more than 90 degrees, part of
+    # the region whose closest point is the vertex lies inside one face and
+    # outside the other. The master is locally the union of the two faces'
+    # insides there, so such a slave is inside; the old rule (larger normal
+    # distance wins) reported it outside at +|x - v|.
+    nodes = np.array([[-2.0, 0.0], [0.0, 0.0], [-3.0, -1.0]])  # +x, then a right turn of 162 deg
+    scene = _scene(nodes, dtype, [[0, 1], [1, 2]])
+    slaves = np.array([[1.0, 2.0], [1.0, -0.5], [0.5, 1.0], [1.0, 0.0]])
+    scene.x = np.resize(slaves, PATHS.shape).astype(dtype)
+    contact = _detect(name, scene)
+    check_contact(contact, scene, dtype)
+    distance = np.linalg.norm(slaves, axis=-1)
+    np.testing.assert_allclose(contact.gap[:4], -distance, rtol=1e-6)
+    assert contact.active[:4].all()
