@@ -3,7 +3,7 @@
 The signed gap of a closed, counter-clockwise outline is the signed distance
 to it: 1-Lipschitz in the slave's position. So between two samples ``dx``
 apart it may change by at most ``|dx|`` plus the rounding of both (the gap
-bound of tests/test_properties.py). Every sample is also checked against the
+bound of tests/exact_checks.py). Every sample is also checked against the
 exact oracle there (``check_contact``), so the chosen segment changes only
 where the oracle's does, or at a tie to within that bound.
 """
@@ -15,7 +15,7 @@ import pytest
 
 import jaxcontact
 from jaxcontact import BucketPlan, Surface
-from tests.test_properties import ULPS, Scene, check_contact
+from tests.exact_checks import ULPS, Scene, check_contact
 
 # An L, counter-clockwise: convex corners and one concave corner, at (1, 1).
 L_NODES = np.array([[0, 0], [2, 0], [2, 1], [1, 1], [1, 2], [0, 2]], np.float64)

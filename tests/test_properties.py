@@ -7,30 +7,8 @@ segments, on the bisectors of corners, at ``radius +- eps``, nearly collinear
 with a segment, beside a segment 1e-9 long, far from the origin; paths graze
 an end point, run parallel to or along a segment, stop on it or do not move.
 
-Error bounds (``ULPS`` = 8 units of eps of the dtype):
-
-- gap and point: ``ULPS * eps * (|x - a| + |b - a|)`` (plus half an ulp of
-  the coordinates for the point, its own rounding). ``x - a`` and ``b - a``
-  are differences of the inputs, each within eps/2 of exact; the rest is a
-  handful of products and sums of numbers no larger than those lengths (a
-  dot product, one ratio, one multiply-subtract, a normalisation), each
-  adding at most eps/2 of that scale. The coordinates' offset from the
-  origin does not enter: the oracle is exact for the same rounded inputs.
-- xi: the same over ``|b - a|`` (a ratio of lengths: ill-conditioned on a
-  1e-9-long segment, which the bound says).
-- segment choice: a different segment than the oracle's is accepted only
-  where the exact distances of the two differ by at most twice the gap
-  bound (both are computed with that error) and they are not the same
-  shared vertex, where the library decides exactly (it measures both from
-  the vertex). ``found`` may differ only within the gap bound of the radius.
-- crossings: each orientation test is a cross product of two differences,
-  computed within ``ULPS * eps`` of the product of their lengths; a decision
-  may differ from the oracle's only where such a test is that close to zero,
-  or where two segments are met at times within the bound of ``t``:
-  ``ULPS * eps * conditioning`` (``oracle.exact_meetings``), which grows as
-  the path turns parallel to the segment.
-
-Hypothesis settings come from the profile in tests/conftest.py.
+Every row is checked against the exact oracle within the bounds stated in
+tests/exact_checks.py. Hypothesis settings come from the profile in tests/conftest.py.
 """
 
 from __future__ import annotations
@@ -48,12 +26,12 @@ from hypothesis import strategies as st
 import jaxcontact
 from jaxcontact import BucketPlan, Surface
 from tests import oracle
+from tests.exact_checks import ULPS, Scene, check_contact, check_crossing
 from tests.helpers import assert_all_finite, blind_spot
 
 NUM_SLAVES = 16
 NUM_SEGMENTS = 56  # above the 48 where bucket_sort's own plans switch to cells
 NUM_NODES = NUM_SEGMENTS + 1
-ULPS = 8
 
 
 def _plan(use_cells: bool, for_paths: bool) -> BucketPlan:
@@ -92,23 +70,6 @@ CROSSING_DETECTORS = {
     "bucket_swept": _bucket_swept(False),
     "bucket_swept_cells": _bucket_swept(True),
 }
-
-
-@dataclasses.dataclass
-class Scene:
-    """One drawn scene, padded to the fixed shape, already rounded to its dtype."""
-
-    x_prev: np.ndarray  # f[NUM_SLAVES, 2]
-    x: np.ndarray  # f[NUM_SLAVES, 2]
-    nodes: np.ndarray  # f[NUM_NODES, 2]
-    segments: np.ndarray  # i32[NUM_SEGMENTS, 2]
-    seg_mask: np.ndarray  # bool[NUM_SEGMENTS]
-    radius: float
-
-    def surface(self) -> Surface:
-        return Surface(
-            jnp.asarray(self.nodes), jnp.asarray(self.segments), jnp.asarray(self.seg_mask)
-        )
 
 
 def _unit(v):
@@ -229,105 +190,6 @@ def scenes(draw, dtype):
     scene.radius = draw(st.sampled_from([0.0, 0.125, 0.5, 2.0]) | st.just(nearest * (1 + bump)))
     scene.radius = max(scene.radius, 0.0)
     return scene
-
-
-def _bound(dtype, scale):
-    return ULPS * float(np.finfo(dtype).eps) * scale
-
-
-def check_contact(contact, scene: Scene, dtype):
-    """Every row of ``contact`` against the exact oracle, within the module's bounds."""
-    assert_all_finite(contact)
-    assert not bool(contact.overflow)
-    expected = oracle.oracle_contact(
-        scene.x, scene.nodes, scene.segments, scene.seg_mask, None, scene.radius
-    )
-    for row in range(len(scene.x)):
-        pairs = {p.segment: p for p in oracle.exact_pairs(
-            scene.x[row], scene.nodes, scene.segments, scene.seg_mask)}  # fmt: skip
-        if not pairs:
-            assert not contact.found[row]
-            continue
-        best = min(pairs.values(), key=lambda p: p.distance_squared)
-        distance = math.sqrt(float(best.distance_squared))
-        found_tol = _bound(dtype, best.scale)
-        if bool(contact.found[row]) != bool(expected.found[row]):
-            assert abs(distance - scene.radius) <= found_tol, (row, distance, scene.radius)
-            continue
-        if not expected.found[row]:
-            assert int(contact.segment[row]) == -1
-            continue
-        chosen = int(contact.segment[row])
-        wanted = int(expected.segment[row])
-        want = expected
-        if chosen != wanted:
-            mine, theirs = pairs[chosen], pairs[wanted]
-            gap = abs(math.sqrt(float(mine.distance_squared)) - math.sqrt(
-                float(theirs.distance_squared)))  # fmt: skip
-            tol = 2 * _bound(dtype, max(mine.scale, theirs.scale))
-            assert gap <= tol, (row, chosen, wanted, gap, tol)
-            # Both measured from the same end point: the distances tie exactly in
-            # floating point too, and the tie rule's key, the normal distance,
-            # decides unless the two keys are within their rounding.
-            if mine.at_end and theirs.at_end and mine.point == theirs.point:
-                keys = abs(mine.normal_distance - theirs.normal_distance)
-                assert keys <= tol, f"row {row}: vertex tie decided against the tie rule"
-            only = np.arange(NUM_SEGMENTS) == chosen
-            want = oracle.oracle_contact(
-                scene.x[row], scene.nodes, scene.segments, only, None, 1e300
-            )
-            pair, index = mine, 0
-        else:
-            pair, index = pairs[chosen], row
-        tol = _bound(dtype, pair.scale)
-        assert abs(float(contact.gap[row]) - want.gap[index]) <= tol, (row, "gap")
-        xi_tol = _bound(dtype, pair.scale / pair.length)
-        assert abs(float(contact.xi[row]) - want.xi[index]) <= xi_tol, (row, "xi")
-        assert np.abs(np.asarray(contact.normal[row], np.float64) - want.normal[index]).max() <= (
-            _bound(dtype, 1.0)
-        ), (row, "normal")
-        ulp = float(np.max(np.spacing(np.abs(scene.x[row]))))
-        point_error = np.abs(np.asarray(contact.point[row], np.float64) - want.point[index]).max()
-        assert point_error <= tol + ulp, (row, "point", point_error)
-
-
-def _fragile(meeting: oracle.ExactMeeting, dtype) -> bool:
-    """A crossing decision of this pair that rounding may flip."""
-    return min(meeting.orientations) <= _bound(dtype, 1.0)
-
-
-def check_crossing(crossing, scene: Scene, dtype):
-    """Every row of ``crossing`` against the exact oracle, within the module's bounds."""
-    assert_all_finite(crossing)
-    assert not bool(crossing.overflow)
-    for row in range(NUM_SLAVES):
-        path = scene.x_prev[row], scene.x[row]
-        meetings = {m.segment: m for m in oracle.exact_meetings(
-            *path, scene.nodes, scene.segments, scene.seg_mask)}  # fmt: skip
-        hits = [m for m in meetings.values() if m.t is not None]
-        first = min(hits, key=lambda m: (m.t, m.segment)) if hits else None
-        chosen = int(crossing.segment[row])
-        if not bool(crossing.crossed[row]):
-            assert chosen == -1
-            # A miss where the oracle hits: only if every hit is fragile.
-            assert all(_fragile(m, dtype) for m in hits), (row, "missed", first)
-            continue
-        mine = meetings[chosen]
-        if mine.t is None:
-            assert _fragile(mine, dtype), (row, "crossed a segment it misses", chosen)
-            continue
-        t = float(crossing.t[row])
-        assert abs(t - float(mine.t)) <= _bound(dtype, mine.conditioning), (row, "t")
-        if chosen != first.segment:
-            # Another segment met first in exact arithmetic: it must be fragile,
-            # or met at a time within the bound of this one.
-            tol = _bound(dtype, mine.conditioning + first.conditioning)
-            assert _fragile(first, dtype) or float(mine.t - first.t) <= tol, (row, chosen, first)
-        start, end = (np.asarray(v[row], np.float64) for v in (scene.x_prev, scene.x))
-        point = start + float(mine.t) * (end - start)
-        ulp = float(np.max(np.spacing(np.abs(scene.x[row]))))
-        tol = _bound(dtype, mine.conditioning) * float(np.abs(end - start).max()) + 2 * ulp
-        assert np.abs(np.asarray(crossing.point[row], np.float64) - point).max() <= tol
 
 
 def _with_bad_rows(values: np.ndarray, rows, fill) -> np.ndarray:

@@ -1,0 +1,168 @@
+"""Checking a detector's rows against the exact oracle, within stated float bounds.
+
+Shared by the property tests (tests/test_properties.py) and the continuity
+tests (tests/test_continuity.py).
+
+Error bounds (``ULPS`` = 8 units of eps of the dtype):
+
+- gap and point: ``ULPS * eps * (|x - a| + |b - a|)`` (plus half an ulp of
+  the coordinates for the point, its own rounding). ``x - a`` and ``b - a``
+  are differences of the inputs, each within eps/2 of exact; the rest is a
+  handful of products and sums of numbers no larger than those lengths (a
+  dot product, one ratio, one multiply-subtract, a normalisation), each
+  adding at most eps/2 of that scale. The coordinates' offset from the
+  origin does not enter: the oracle is exact for the same rounded inputs.
+- xi: the same over ``|b - a|`` (a ratio of lengths: ill-conditioned on a
+  1e-9-long segment, which the bound says).
+- segment choice: a different segment than the oracle's is accepted only
+  where the exact distances of the two differ by at most twice the gap
+  bound (both are computed with that error). At a vertex shared by both
+  the distances tie exactly in floating point too (both measure from the
+  vertex), and the other face is accepted only where the tie rule's keys,
+  the two normal distances, are within that bound of each other; the gap
+  (sign included) must then match the oracle's either way. ``found`` may
+  differ only within the gap bound of the radius.
+- crossings: each orientation test is a cross product of two differences,
+  computed within ``ULPS * eps`` of the product of their lengths; a decision
+  may differ from the oracle's only where such a test is that close to zero,
+  or where two segments are met at times within the bound of ``t``:
+  ``ULPS * eps * conditioning`` (``oracle.exact_meetings``), which grows as
+  the path turns parallel to the segment.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import jax.numpy as jnp
+import numpy as np
+
+from jaxcontact import Surface
+from tests import oracle
+from tests.helpers import assert_all_finite
+
+ULPS = 8
+
+
+@dataclasses.dataclass
+class Scene:
+    """One scene in NumPy, already rounded to its dtype."""
+
+    x_prev: np.ndarray  # f[N, 2]
+    x: np.ndarray  # f[N, 2]
+    nodes: np.ndarray  # f[P, 2]
+    segments: np.ndarray  # i32[M, 2]
+    seg_mask: np.ndarray  # bool[M]
+    radius: float
+
+    def surface(self) -> Surface:
+        return Surface(
+            jnp.asarray(self.nodes), jnp.asarray(self.segments), jnp.asarray(self.seg_mask)
+        )
+
+
+def bound(dtype, scale):
+    return ULPS * float(np.finfo(dtype).eps) * scale
+
+
+def check_contact(contact, scene: Scene, dtype):
+    """Every row of ``contact`` against the exact oracle, within the module's bounds."""
+    assert_all_finite(contact)
+    assert not bool(contact.overflow)
+    expected = oracle.oracle_contact(
+        scene.x, scene.nodes, scene.segments, scene.seg_mask, None, scene.radius
+    )
+    for row in range(len(scene.x)):
+        pairs = {p.segment: p for p in oracle.exact_pairs(
+            scene.x[row], scene.nodes, scene.segments, scene.seg_mask)}  # fmt: skip
+        if not pairs:
+            assert not contact.found[row]
+            continue
+        best = min(pairs.values(), key=lambda p: p.distance_squared)
+        distance = math.sqrt(float(best.distance_squared))
+        found_tol = bound(dtype, best.scale)
+        if bool(contact.found[row]) != bool(expected.found[row]):
+            assert abs(distance - scene.radius) <= found_tol, (row, distance, scene.radius)
+            continue
+        if not expected.found[row]:
+            assert int(contact.segment[row]) == -1
+            continue
+        chosen = int(contact.segment[row])
+        wanted = int(expected.segment[row])
+        want = expected
+        if chosen != wanted:
+            mine, theirs = pairs[chosen], pairs[wanted]
+            gap = abs(math.sqrt(float(mine.distance_squared)) - math.sqrt(
+                float(theirs.distance_squared)))  # fmt: skip
+            tol = 2 * bound(dtype, max(mine.scale, theirs.scale))
+            assert gap <= tol, (row, chosen, wanted, gap, tol)
+            # Both measured from the same end point: the distances tie exactly in
+            # floating point too, and the tie rule's key, the normal distance,
+            # decides unless the two keys are within their rounding.
+            if mine.at_end and theirs.at_end and mine.point == theirs.point:
+                keys = abs(mine.normal_distance - theirs.normal_distance)
+                assert keys <= tol, f"row {row}: vertex tie decided against the tie rule"
+            # The chosen face's own values; its gap's sign, at a vertex tie,
+            # from the faces that tie with it there (the tie rule's sign).
+            only = np.arange(len(scene.segments)) == chosen
+            want = oracle.oracle_contact(
+                scene.x[row], scene.nodes, scene.segments, only, None, 1e300
+            )
+            for k, other in pairs.items():
+                only[k] |= mine.at_end and other.at_end and other.point == mine.point
+            want_gap = oracle.oracle_contact(
+                scene.x[row], scene.nodes, scene.segments, only, None, 1e300
+            ).gap[0]
+            pair, index = mine, 0
+        else:
+            pair, index, want_gap = pairs[chosen], row, expected.gap[row]
+        tol = bound(dtype, pair.scale)
+        assert abs(float(contact.gap[row]) - want_gap) <= tol, (row, "gap")
+        xi_tol = bound(dtype, pair.scale / pair.length)
+        assert abs(float(contact.xi[row]) - want.xi[index]) <= xi_tol, (row, "xi")
+        assert np.abs(np.asarray(contact.normal[row], np.float64) - want.normal[index]).max() <= (
+            bound(dtype, 1.0)
+        ), (row, "normal")
+        ulp = float(np.max(np.spacing(np.abs(scene.x[row]))))
+        point_error = np.abs(np.asarray(contact.point[row], np.float64) - want.point[index]).max()
+        assert point_error <= tol + ulp, (row, "point", point_error)
+
+
+def fragile(meeting: oracle.ExactMeeting, dtype) -> bool:
+    """A crossing decision of this pair that rounding may flip."""
+    return min(meeting.orientations) <= bound(dtype, 1.0)
+
+
+def check_crossing(crossing, scene: Scene, dtype):
+    """Every row of ``crossing`` against the exact oracle, within the module's bounds."""
+    assert_all_finite(crossing)
+    assert not bool(crossing.overflow)
+    for row in range(len(scene.x)):
+        path = scene.x_prev[row], scene.x[row]
+        meetings = {m.segment: m for m in oracle.exact_meetings(
+            *path, scene.nodes, scene.segments, scene.seg_mask)}  # fmt: skip
+        hits = [m for m in meetings.values() if m.t is not None]
+        first = min(hits, key=lambda m: (m.t, m.segment)) if hits else None
+        chosen = int(crossing.segment[row])
+        if not bool(crossing.crossed[row]):
+            assert chosen == -1
+            # A miss where the oracle hits: only if every hit is fragile.
+            assert all(fragile(m, dtype) for m in hits), (row, "missed", first)
+            continue
+        mine = meetings[chosen]
+        if mine.t is None:
+            assert fragile(mine, dtype), (row, "crossed a segment it misses", chosen)
+            continue
+        t = float(crossing.t[row])
+        assert abs(t - float(mine.t)) <= bound(dtype, mine.conditioning), (row, "t")
+        if chosen != first.segment:
+            # Another segment met first in exact arithmetic: it must be fragile,
+            # or met at a time within the bound of this one.
+            tol = bound(dtype, mine.conditioning + first.conditioning)
+            assert fragile(first, dtype) or float(mine.t - first.t) <= tol, (row, chosen, first)
+        start, end = (np.asarray(v[row], np.float64) for v in (scene.x_prev, scene.x))
+        point = start + float(mine.t) * (end - start)
+        ulp = float(np.max(np.spacing(np.abs(scene.x[row]))))
+        tol = bound(dtype, mine.conditioning) * float(np.abs(end - start).max()) + 2 * ulp
+        assert np.abs(np.asarray(crossing.point[row], np.float64) - point).max() <= tol
