@@ -13,7 +13,7 @@ import jax
 import jax.numpy as jnp
 
 from jaxcontact._cells import stable_order
-from jaxcontact._geometry import cross, dot, path_hit, project, unit_normal
+from jaxcontact._geometry import cross_sign, dot, path_hit, project, unit_normal
 from jaxcontact._inputs import Segments
 from jaxcontact._types import Array, Contact, Crossing
 
@@ -97,16 +97,15 @@ def prefer_outside(x: Array, segments: Segments, choice: Array) -> tuple[Array, 
     # it, where it ties exactly in reals). Both then measure from v.
     offset = x - jnp.where(at_end[:, None], b, a)
     rival_d = end[rival] - start[rival]
-    turn = jax.vmap(cross)(
-        jnp.where(at_end[:, None], d, rival_d), jnp.where(at_end[:, None], rival_d, d)
-    )
-    convex = turn >= 0
+    incoming = jnp.where(at_end[:, None], d, rival_d)
+    outgoing = jnp.where(at_end[:, None], rival_d, d)
+    convex = jax.vmap(cross_sign)(incoming, outgoing) >= 0
     own_key = jax.vmap(dot)(offset, normal[index])
     rival_key = jax.vmap(dot)(offset, normal[rival])
     better = jnp.where(convex, rival_key > own_key, rival_key < own_key)
     tied = (choice >= 0) & (other >= 0) & segments.ok[rival]
-    own_side = jnp.sign(jax.vmap(cross)(offset, d))
-    rival_side = jnp.sign(jax.vmap(cross)(offset, rival_d))
+    own_side = jax.vmap(cross_sign)(offset, d)
+    rival_side = jax.vmap(cross_sign)(offset, rival_d)
     larger, smaller = jnp.maximum(own_side, rival_side), jnp.minimum(own_side, rival_side)
     inside = jnp.where(convex, larger < 0, smaller < 0)
     sign = jnp.where(tied, jnp.where(inside, -1, 1), 0).astype(x.dtype)

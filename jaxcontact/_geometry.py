@@ -38,6 +38,19 @@ def cross(u: Array, v: Array) -> Array:
     return u[0] * v[1] - u[1] * v[0]
 
 
+def cross_sign(u: Array, v: Array) -> Array:
+    """The sign (-1, 0 or 1, in ``u``'s dtype) of ``cross(u, v)``, by comparing its two products.
+
+    Rounding is monotone, so the rounded products compare as the exact ones
+    do (or tie): the sign is never wrong, and exactly zero whenever the exact
+    products are equal. A subtraction would not be: XLA may contract
+    ``p - q`` into a fused multiply-add that returns the rounding error of
+    ``q`` (``cross(d, -d)`` came out as -1e-16).
+    """
+    left, right = u[0] * v[1], u[1] * v[0]
+    return (left > right).astype(u.dtype) - (left < right).astype(u.dtype)
+
+
 def safe_sqrt(value: Array) -> Array:
     """``sqrt(value)`` with a zero (not infinite) gradient at ``value == 0``."""
     positive = value > 0
@@ -125,7 +138,7 @@ def project(x: Array, a: Array, b: Array) -> Projection:
     # differences, exact when its products are (a slave on the extension of
     # the segment's line gets exactly zero: positive), not from the rounded
     # unit normal, whose dot product can round to -1e-9 there.
-    corner_sign = jnp.where(cross(offset, b - a) < 0, -1, 1).astype(x.dtype)
+    corner_sign = jnp.where(cross_sign(offset, b - a) < 0, -1, 1).astype(x.dtype)
     gap = jnp.where(interior, normal_offset, corner_sign * safe_sqrt(distance_squared))
     return Projection(distance_squared, gap, xi, point, normal, normal_offset)
 

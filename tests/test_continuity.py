@@ -8,6 +8,8 @@ exact oracle there (``check_contact``), so the chosen segment changes only
 where the oracle's does, or at a tie to within that bound.
 """
 
+import dataclasses
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -168,3 +170,26 @@ def test_slaves_inside_a_sharp_concave_notch_are_inside(name, dtype):
     distance = np.linalg.norm(slaves, axis=-1)
     np.testing.assert_allclose(contact.gap[:4], -distance, rtol=1e-6)
     assert contact.active[:4].all()
+
+
+@NAMES
+def test_slaves_beyond_spike_tips_far_from_the_origin_are_outside(name):
+    # Regression, found by the property tests: at a spike O -> P -> O the two
+    # faces are antiparallel, the corner is straight back (convex) and a slave
+    # beyond P is outside both: gap > 0. Computed as u0 v1 - u1 v0, the turn
+    # cross(d, -d) came out as -1e-16 (a fused multiply-add) and made the
+    # corner concave for about half of such slaves; its sign now comes from
+    # comparing the two products, which rounding cannot reorder.
+    rng = np.random.default_rng(0)
+    for _ in range(4):
+        origin = np.array([1024.0, 1024.0])
+        tip = origin + rng.uniform(-3, 3, 2)
+        along = (tip - origin) / np.linalg.norm(tip - origin)
+        across = np.array([along[1], -along[0]])
+        scene = _scene(np.stack([origin, tip, origin]), np.float64, [[0, 1], [1, 2]])
+        offsets = rng.uniform(-1, 1, (len(PATHS), 1)) * 1e-13
+        scene.x = tip + 1e-3 * along + offsets * across
+        contact = _detect(name, scene)
+        assert (np.asarray(contact.gap) > 0).all()
+        check_contact(jax.tree.map(lambda v: v[:64] if v.ndim else v, contact),
+                      dataclasses.replace(scene, x=scene.x[:64]), np.float64)  # fmt: skip
