@@ -156,7 +156,7 @@ def scenes(draw, dtype):
         c = nodes[following[0][1]] if following else b + (b - a)
         s = draw(st.sampled_from([0.0, 0.25, 0.5, 1.0]) | st.floats(0, 1))
         h = draw(st.sampled_from([0.0, 0.125, -0.125]) | st.floats(-1, 1))
-        tiny = draw(st.sampled_from([1e-7, -1e-7, 1e-12, -1e-12, 1e-300]))
+        tiny = draw(st.sampled_from([1e-7, -1e-7, 1e-12, -1e-12]))
         x = _place(draw(st.sampled_from(SLAVE_KINDS)), a, b, c, s, h, tiny)
         move = np.array(draw(st.tuples(st.floats(-1, 1), st.floats(-1, 1))))
         path = draw(st.sampled_from(PATH_KINDS))
@@ -169,7 +169,12 @@ def scenes(draw, dtype):
     def place(points, rows):
         padded = np.zeros((rows, 2))
         padded[: len(points)] = np.asarray(points).reshape(-1, 2)
-        return (padded + offset).astype(dtype)
+        placed = (padded + offset).astype(dtype)
+        # XLA on the CPU flushes subnormal results to zero, so coordinates
+        # whose products would be subnormal (below sqrt(tiny), 1e-19 in
+        # float32) are outside what any JAX program can resolve: zero them.
+        placed[np.abs(placed) < np.sqrt(np.finfo(dtype).tiny)] = 0
+        return placed
 
     padded_segments = np.zeros((NUM_SEGMENTS, 2), np.int32)
     padded_segments[: len(segments)] = segments
