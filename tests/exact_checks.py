@@ -31,7 +31,9 @@ Error bounds (``ULPS`` = 8 units of eps of the dtype):
   may differ from the oracle's only where such a test is that close to zero,
   or where two segments are met at times within the bound of ``t``:
   ``ULPS * eps * conditioning`` (``oracle.exact_meetings``), which grows as
-  the path turns parallel to the segment.
+  the path turns parallel to the segment. Where a path is collinear with the
+  chosen segment to within rounding, t itself is unconditioned (along the
+  line or across it once): only the point is checked, to lie on the segment.
 """
 
 from __future__ import annotations
@@ -168,6 +170,17 @@ def check_crossing(crossing, scene: Scene, dtype):
             assert fragile(mine, dtype), (row, "crossed a segment it misses", chosen)
             continue
         t = float(crossing.t[row])
+        if fragile(mine, dtype):
+            # Collinear to within rounding: the path may be taken as running
+            # along the segment's line or as crossing it once, so t may be any
+            # time the path is on the segment; the point must be on it.
+            point = crossing.point[row]
+            on = oracle.exact_pairs(point, scene.nodes, scene.segments, scene.seg_mask)
+            pair = next(p for p in on if p.segment == chosen)
+            travel = float(np.abs(scene.x[row] - scene.x_prev[row]).max())
+            tol = bound(dtype, mine.conditioning * travel + 1)
+            assert math.sqrt(float(pair.distance_squared)) <= tol, (row, "point off the segment")
+            continue
         assert abs(t - float(mine.t)) <= bound(dtype, mine.conditioning), (row, "t")
         if chosen != first.segment:
             # Another segment met first in exact arithmetic: it must be fragile,
