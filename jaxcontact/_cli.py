@@ -18,6 +18,8 @@ import numpy as np
 
 from jaxcontact import all_to_all, swept
 from jaxcontact._timing import pinned_note, time_call
+from jaxcontact.bench import add_arguments as add_bench_arguments
+from jaxcontact.bench import run_all as run_bench
 from jaxcontact.scenes import paper_scene
 
 # Drawn around the tool tip T = (50.9, 7): the rake and clearance faces, the
@@ -157,6 +159,9 @@ def _parser() -> argparse.ArgumentParser:
         "--dtype", choices=("float32", "float64"), default="float32", help="default float32"
     )
     demo.set_defaults(run=_demo)
+    bench = commands.add_parser("bench", help="run the benchmarks; write CSV and PNG files")
+    add_bench_arguments(bench)
+    bench.set_defaults(run=run_bench)
     return parser
 
 
