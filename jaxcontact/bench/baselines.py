@@ -210,35 +210,44 @@ def jaxmd_cell_list(x, start, end, radius):
     both = np.concatenate([x, middle])
     origin = both.min(axis=0) - reach
     box = both.max(axis=0) + reach - origin
-    cells = partition.cell_list(jnp.asarray(box, x.dtype), float(reach)).allocate(
-        jnp.asarray(middle - origin)
-    )
+    # jax-md broadcasts (N, 2) against (2,) inside: allowed here whatever the caller's setting.
+    with jax.numpy_rank_promotion("allow"):
+        cells = partition.cell_list(jnp.asarray(box, x.dtype), float(reach)).allocate(
+            jnp.asarray(middle - origin)
+        )
     shape = np.array(cells.id_buffer.shape[1::-1])  # cells in x, in y (ids are [y, x, slot])
-    cell_edge = jnp.asarray(box / shape, x.dtype)
-    origin = jnp.asarray(origin, x.dtype)
+    cell_edge = jnp.asarray(box / shape, x.dtype)[None]  # f[1, 2]
+    origin = jnp.asarray(origin, x.dtype)[None]
 
-    @jax.jit
-    def detect(x, start, end):
-        ids = cells.update((start + end) / 2 - origin).id_buffer[..., 0]  # i[gy, gx, slots]
-        own = jnp.floor((x - origin) / cell_edge).astype(jnp.int32)
-        steps = jnp.array([(i, j) for i in (-1, 0, 1) for j in (-1, 0, 1)])
-        around = jnp.clip(own[:, None, :] + steps, 0, jnp.asarray(shape - 1))  # i[N, 9, 2]
-        candidates = ids[around[..., 1], around[..., 0]].reshape(len(x), -1)  # i[N, 9 slots]
+    steps = jnp.array([(i, j) for i in (-1, 0, 1) for j in (-1, 0, 1)])  # i[9, 2]
+    last_cell = jnp.asarray(shape - 1)[None]  # i[1, 2]
+
+    def closest(slave, ids, start, end):
+        """``(segment, gap, found)`` of one slave f[2] from the 3 x 3 cells around it."""
+        own = jnp.floor((slave[None] - origin) / cell_edge).astype(jnp.int32)  # i[1, 2]
+        around = jnp.clip(own + steps, 0, last_cell)  # i[9, 2]
+        candidates = ids[around[:, 1], around[:, 0]].reshape(-1)  # i[9 * slots]
         real = candidates < len(start)
         k = jnp.where(real, candidates, 0)
         a, d = start[k], end[k] - start[k]
-        from_a = x[:, None, :] - a
+        from_a = slave[None] - a
         xi = jnp.clip(jnp.sum(from_a * d, -1) / jnp.sum(d * d, -1), 0, 1)
-        offset = from_a - xi[..., None] * d
+        offset = from_a - xi[:, None] * d
         distance_squared = jnp.where(real, jnp.sum(offset * offset, -1), jnp.inf)
-        best = jnp.argmin(distance_squared, axis=1)
-        rows = jnp.arange(len(x))
-        distance = jnp.sqrt(distance_squared[rows, best])
-        outward = cross(offset[rows, best], d[rows, best])
+        best = jnp.argmin(distance_squared)
+        distance = jnp.sqrt(distance_squared[best])
         found = distance <= radius
-        segment = jnp.where(found, k[rows, best], -1)
-        gap = jnp.where(outward < 0, -distance, distance)
-        return segment, jnp.where(found, gap, 0), found, cells.did_buffer_overflow
+        gap = jnp.where(cross(offset[best], d[best]) < 0, -distance, distance)
+        return jnp.where(found, k[best], -1), jnp.where(found, gap, 0), found
+
+    @jax.jit
+    def detect(x, start, end):
+        with jax.numpy_rank_promotion("allow"):
+            refilled = cells.update((start + end) / 2 - origin)
+        ids = refilled.id_buffer[..., 0]  # i[gy, gx, slots]
+        # Slaves in batches: an (N, 9 * slots) candidate table would not fit at 10^6.
+        answer = jax.lax.map(lambda one: closest(one, ids, start, end), x, batch_size=8192)
+        return (*answer, refilled.did_buffer_overflow)
 
     return detect, tuple(jnp.asarray(a) for a in (x, start, end))
 
