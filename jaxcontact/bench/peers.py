@@ -132,6 +132,23 @@ def run_scene(kind, size, parameter, repeats, slow_s) -> list[dict]:
     return rows
 
 
+def ratios(rows) -> str:
+    """Markdown pivot: each method's median over ``bucket_sort``'s, one column per scene."""
+    scenes = list(dict.fromkeys((r["scene"], r["nodes"]) for r in rows))
+    header = [f"{scene.replace(' (x_tip=', ' (')}, N={nodes:,}" for scene, nodes in scenes]
+    lines = ["| method | " + " | ".join(header) + " |", "|---|" + "---:|" * len(scenes)]
+    for method in dict.fromkeys(r["method"] for r in rows):
+        cells = []
+        for scene, nodes in scenes:
+            found = [
+                r for r in rows if (r["scene"], r["nodes"], r["method"]) == (scene, nodes, method)
+            ]
+            ratio = found[0]["ratio"] if found else ""
+            cells.append(f"{ratio}x" if ratio else "—")
+        lines.append(f"| {method} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
 def plot(rows, out) -> list[str]:
     """Run time against nodes for every method, one panel per scene kind, log axes."""
     plt = _run.pyplot(out)
@@ -171,6 +188,10 @@ def run(quick: bool, out: str, repeats: int | None = None, slow_s: float | None 
             "",
             f"`python benchmarks/peers.py{' --quick' if quick else ''}`; {_run.machine()}; "
             "float32 inputs; medians of interleaved runs; ratio = median / bucket_sort's median.",
+            "",
+            "Ratios (— : not run on that scene, the reason in the table below):",
+            "",
+            ratios(rows),
             "",
             _run.markdown(rows, (*columns, *more)),
             "",

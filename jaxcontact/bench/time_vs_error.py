@@ -124,9 +124,7 @@ def run_offsets(num_nodes, offsets, with_bucket) -> list[dict]:
             result = detect(scene.x, scene.surface)
             mismatch = _run.check(result, np.asarray(moved.x), start, end, exact)
             own = _run.check(result, x32, start32, end32, rounded)
-            entry = _run.row(
-                "cutting, moved by (o, o)", num_nodes, len(start), name, None, mismatch
-            )
+            entry = _run.row("cutting, moved by (o, o)", len(x32), len(start), name, None, mismatch)
             entry.update(position=f"o={offset:g}", dtype="float32")
             entry["note"] = (
                 f"{oracle.describe(mismatch)}; against its rounded inputs: "
@@ -152,7 +150,11 @@ def plot(rows, out) -> list[str]:
                 lambda r: r["missed"] + r["false"] + r["wrong_segment"],
                 "missed + false + wrong segment",
             ),
-            (panels[1][column], lambda r: float(r["max_gap_error"]), "largest gap error"),
+            (
+                panels[1][column],
+                lambda r: max(float(r["max_gap_error"]), 1e-17),
+                "largest gap error",
+            ),
         ):
             points = sorted((r["median_ms"], measure(r), r["method"]) for r in mine)
             front, best = [], np.inf
@@ -160,15 +162,14 @@ def plot(rows, out) -> list[str]:
                 if error < best:
                     front.append((time_ms, error))
                     best = error
-            for time_ms, error, name in points:
-                axes.scatter(time_ms, error, s=18)
-                axes.annotate(
-                    name, (time_ms, error), fontsize=6, xytext=(3, 3), textcoords="offset points"
-                )
+            for index, (time_ms, error, name) in enumerate(points):
+                marker = "osD^v<>ph*"[index % 10]
+                axes.scatter(time_ms, error, s=22, marker=marker, label=name)
             axes.plot(*zip(*front, strict=True), "k--", lw=0.8, label="Pareto front")
-            axes.set(xscale="log", yscale="symlog" if column >= 0 and "+" in ylabel else "log")
+            counts = "+" in ylabel  # counts may be 0: linear near zero; gap errors: log
+            axes.set(xscale="log", yscale="symlog" if counts else "log")
             axes.set(xlabel="median run time (ms)", ylabel=ylabel, title=scene)
-            axes.legend(fontsize=7)
+            axes.legend(fontsize=6)
     figure.tight_layout()
     paths.append(os.path.join(out, "time_vs_error.png"))
     figure.savefig(paths[-1], dpi=120)
