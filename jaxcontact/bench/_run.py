@@ -7,6 +7,7 @@ own oracle check beside its timing.
 
 from __future__ import annotations
 
+import argparse
 import csv
 import os
 import platform
@@ -151,3 +152,35 @@ def pyplot(out: str):
     import matplotlib.pyplot as plt
 
     return plt
+
+
+def section(name, title, quick, note, body, pictures) -> str:
+    """A benchmark's markdown: heading, command, machine, ``note``, ``body`` lines, pictures."""
+    command = f"python benchmarks/{name}.py{' --quick' if quick else ''}"
+    return "\n".join(
+        [
+            f"## {title}",
+            "",
+            f"`{command}`; {machine()}; {note}",
+            "",
+            *body,
+            "",
+            *[f"![{os.path.basename(p)}]({os.path.basename(p)})" for p in pictures],
+            "",
+        ]
+    )
+
+
+def main(run, description, argv=None, *, slow: bool = False) -> int:
+    """The command line of one benchmark module: parses ``argv``, prints ``run``'s markdown."""
+    parser = argparse.ArgumentParser(description=description)
+    parser.add_argument("--quick", action="store_true", help="small sizes, a smoke test")
+    parser.add_argument("--out", default="jaxcontact-bench", help="folder for CSV and PNG")
+    parser.add_argument("--repeats", type=int, default=None, help="timed runs per method")
+    if slow:
+        parser.add_argument("--slow", type=float, default=None, help="s: time slower ones once")
+    args = parser.parse_args(argv)
+    jax.config.update("jax_enable_x64", True)  # float64 scenes and variants beside float32
+    options = {"slow_s": args.slow} if slow else {}
+    print(run(args.quick, args.out, args.repeats, **options))
+    return 0

@@ -17,7 +17,6 @@ sort 0.02 s, all-to-all 0.64 s) as reference lines.
 
 from __future__ import annotations
 
-import argparse
 import functools
 import os
 
@@ -172,31 +171,16 @@ def run(quick: bool, out: str, repeats: int | None = None) -> str:
     rows += run_test2(n2, travels, repeats)
     pictures = plot(rows, out)
     columns = ("scene", "position", "nodes", "method", "compile_s", "median_ms", "p10_ms")
-    text = "\n".join(
-        [
-            "## Paper tests (Figs. 8 and 9)",
-            "",
-            f"`python benchmarks/paper_tests.py{' --quick' if quick else ''}`; {_run.machine()}; "
-            f"float32, jit, median of {repeats} interleaved runs.",
-            "",
-            _run.markdown(rows, (*columns, "p90_ms", "note")),
-            "",
-            *[f"![{os.path.basename(p)}]({os.path.basename(p)})" for p in pictures],
-            "",
-            "Paper (Matlab, i5-2430M): bucket sort 0.02 s, all-to-all 0.64 s on average.",
-            "",
-        ]
-    )
+    body = [
+        _run.markdown(rows, (*columns, "p90_ms", "note")),
+        "",
+        "Paper (Matlab, i5-2430M): bucket sort 0.02 s, all-to-all 0.64 s on average.",
+    ]
+    note = f"float32, jit, median of {repeats} interleaved runs."
+    text = _run.section("paper_tests", "Paper tests (Figs. 8 and 9)", quick, note, body, pictures)
     _run.write(out, "paper_tests", rows, text)
     return text
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="small sizes, a smoke test")
-    parser.add_argument("--out", default="jaxcontact-bench", help="folder for CSV and PNG")
-    parser.add_argument("--repeats", type=int, default=None, help="timed runs per method")
-    args = parser.parse_args(argv)
-    jax.config.update("jax_enable_x64", True)  # float64 scenes for the checks; runs are float32
-    print(run(args.quick, args.out, args.repeats))
-    return 0
+    return _run.main(run, __doc__.splitlines()[0], argv)

@@ -21,7 +21,6 @@ call only.
 
 from __future__ import annotations
 
-import argparse
 import functools
 import os
 import time
@@ -182,33 +181,18 @@ def run(quick: bool, out: str, repeats: int | None = None, slow_s: float | None 
     pictures = plot(rows, out)
     columns = ("scene", "position", "nodes", "segments", "method", "compile_s", "median_ms")
     more = ("p10_ms", "p90_ms", "ratio", "max_gap_error", "note")
-    text = "\n".join(
-        [
-            "## Peers",
-            "",
-            f"`python benchmarks/peers.py{' --quick' if quick else ''}`; {_run.machine()}; "
-            "float32 inputs; medians of interleaved runs; ratio = median / bucket_sort's median.",
-            "",
-            "Ratios (— : not run on that scene, the reason in the table below):",
-            "",
-            ratios(rows),
-            "",
-            _run.markdown(rows, (*columns, *more)),
-            "",
-            *[f"![{os.path.basename(p)}]({os.path.basename(p)})" for p in pictures],
-            "",
-        ]
-    )
+    body = [
+        "Ratios (— : not run on that scene, the reason in the table below):",
+        "",
+        ratios(rows),
+        "",
+        _run.markdown(rows, (*columns, *more)),
+    ]
+    note = "float32 inputs; medians of interleaved runs; ratio = median / bucket_sort's median."
+    text = _run.section("peers", "Peers", quick, note, body, pictures)
     _run.write(out, "peers", rows, text)
     return text
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="small sizes, a smoke test")
-    parser.add_argument("--out", default="jaxcontact-bench", help="folder for CSV and PNG")
-    parser.add_argument("--repeats", type=int, default=None, help="timed runs per method")
-    parser.add_argument("--slow", type=float, default=None, help="seconds: time slower peers once")
-    args = parser.parse_args(argv)
-    print(run(args.quick, args.out, args.repeats, args.slow))
-    return 0
+    return _run.main(run, __doc__.splitlines()[0], argv, slow=True)

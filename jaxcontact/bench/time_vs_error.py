@@ -18,7 +18,6 @@ arithmetic).
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import functools
 import os
@@ -218,36 +217,21 @@ def run(quick: bool, out: str, repeats: int | None = None) -> str:
     timed = [r for r in rows if r["median_ms"] != ""]
     shifted = [r for r in rows if r["median_ms"] == ""]
     columns = ("scene", "nodes", "method", "median_ms", "p10_ms", "p90_ms", "missed", "false")
-    text = "\n".join(
-        [
-            "## Run time against error",
-            "",
-            f"`python benchmarks/time_vs_error.py{' --quick' if quick else ''}`; "
-            f"{_run.machine()}; medians of {repeats} interleaved runs; errors against the "
-            "float64 oracle of the float64 scene.",
-            "",
-            _run.markdown(timed, (*columns, "wrong_segment", "ties", "max_gap_error", "note")),
-            "",
-            "### float32 gap error against coordinate offset",
-            "",
-            _run.markdown(
-                shifted, ("position", "method", "missed", "false", "max_gap_error", "note")
-            ),
-            "",
-            *[f"![{os.path.basename(p)}]({os.path.basename(p)})" for p in pictures],
-            "",
-        ]
+    body = [
+        _run.markdown(timed, (*columns, "wrong_segment", "ties", "max_gap_error", "note")),
+        "",
+        "### float32 gap error against coordinate offset",
+        "",
+        _run.markdown(shifted, ("position", "method", "missed", "false", "max_gap_error", "note")),
+    ]
+    note = (
+        f"medians of {repeats} interleaved runs; errors against the float64 oracle of the "
+        "float64 scene."
     )
+    text = _run.section("time_vs_error", "Run time against error", quick, note, body, pictures)
     _run.write(out, "time_vs_error", rows, text)
     return text
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="small sizes, a smoke test")
-    parser.add_argument("--out", default="jaxcontact-bench", help="folder for CSV and PNG")
-    parser.add_argument("--repeats", type=int, default=None, help="timed runs per variant")
-    args = parser.parse_args(argv)
-    jax.config.update("jax_enable_x64", True)  # float64 variants and scenes
-    print(run(args.quick, args.out, args.repeats))
-    return 0
+    return _run.main(run, __doc__.splitlines()[0], argv)
