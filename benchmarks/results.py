@@ -36,7 +36,8 @@ class Section(NamedTuple):
     title: str
     script: str  # under benchmarks/
     args: tuple = ()  # "{out}" is replaced by the results folder
-    fragment: str | None = None  # a file the script writes its markdown to, else its stdout
+    fragment: str | None = None  # file (from the repo root; "{out}" as above) holding its markdown;
+    # None: its standard output
     fence: bool = False  # stdout that is not markdown: shown as a code block
 
 
@@ -45,13 +46,15 @@ SECTIONS = {
     "dense": Section("Dense detectors", "dense.py"),
     "bucket": Section("Bucket sort", "bucket.py", fence=True),
     "scaling": Section("Devices and batches", "scaling.py"),
-    "paper_tests": Section("Paper tests", "paper_tests.py", ("--out", "{out}"), "paper_tests.md"),
-    "peers": Section("Peers", "peers.py", ("--out", "{out}"), "peers.md"),
-    "time_vs_error": Section(
-        "Time against error", "time_vs_error.py", ("--out", "{out}"), "time_vs_error.md"
+    "paper_tests": Section(
+        "Paper tests", "paper_tests.py", ("--out", "{out}"), "{out}/paper_tests.md"
     ),
-    "stability": Section("Stability", "stability.py", (), "RESULTS_stability.md"),
-    "simulate": Section("Simulation", "simulate.py", (), "RESULTS_simulate.md"),
+    "peers": Section("Peers", "peers.py", ("--out", "{out}"), "{out}/peers.md"),
+    "time_vs_error": Section(
+        "Time against error", "time_vs_error.py", ("--out", "{out}"), "{out}/time_vs_error.md"
+    ),
+    "stability": Section("Stability", "stability.py", (), "benchmarks/RESULTS_stability.md"),
+    "simulate": Section("Simulation", "simulate.py", (), "benchmarks/RESULTS_simulate.md"),
 }
 VERSIONED = ("jax", "jaxlib", "numpy", "scipy", "shapely", "matplotlib", "jax-md", "libigl")
 
@@ -63,7 +66,9 @@ def run_section(name: str, results: str, quick: bool, pinned: bool) -> str:
     stored = os.path.join(results, f"{name}{'_pinned' if pinned else ''}.md")
     if not os.path.exists(script):
         return f"`benchmarks/{section.script}` is not in this checkout: section skipped."
-    args = [arg.format(out=results) for arg in section.args] + (["--quick"] if quick else [])
+    # A pinned run keeps its CSV and PNG files apart from the unpinned one's.
+    out = os.path.join(results, "pinned") if pinned else results
+    args = [arg.format(out=out) for arg in section.args] + (["--quick"] if quick else [])
     command = ["taskset", "-c", "0"] * pinned + [sys.executable, script, *args]
     shown = " ".join(["taskset -c 0"] * pinned + [f"python benchmarks/{section.script}", *args])
     print(f"running: {shown}", file=sys.stderr, flush=True)
@@ -74,9 +79,11 @@ def run_section(name: str, results: str, quick: bool, pinned: bool) -> str:
     if done.returncode:
         body = f"`{shown}` failed (exit {done.returncode}):\n\n```\n{done.stderr[-3000:]}\n```"
     elif section.fragment:
-        fragment = os.path.join(results if section.args else HERE, section.fragment)
+        fragment = os.path.join(ROOT, section.fragment.format(out=out))
         with open(fragment) as stream:
             body = stream.read()
+        if pinned:
+            body = re.sub(r"\]\(([^)/]+\.png)\)", r"](pinned/\1)", body)
     else:
         body = f"```\n{done.stdout.strip()}\n```" if section.fence else done.stdout.strip()
     text = f"Command: `{shown}`\n\n{body.strip()}\n"
@@ -121,6 +128,7 @@ def machine() -> list[str]:
 def assemble(results: str, output: str) -> None:
     """Writes ``output`` from ``notes.md`` and every stored section, in registry order."""
     lines = ["# Benchmark results", "", *machine(), ""]
+    folder = os.path.relpath(results, os.path.dirname(os.path.abspath(output)))
     notes = os.path.join(results, "notes.md")
     if os.path.exists(notes):
         with open(notes) as stream:
@@ -132,18 +140,18 @@ def assemble(results: str, output: str) -> None:
                 with open(stored) as stream:
                     body = stream.read().strip()
                 # Sections bring their own level-2 headings; keep them under this one.
-                body = body.replace("\n## ", "\n### ").removeprefix("## ")
+                body = body.replace("\n## ", "\n### ")
+                if "{out}" in section.args:
+                    # Their pictures are linked by name, beside them in ``results``.
+                    body = re.sub(r"!\[([^\]]*)\]\(([^):]+\.png)\)", rf"![\1]({folder}/\2)", body)
                 lines += [f"## {section.title}{how}", "", body, ""]
             elif not suffix:
                 missing = (
                     f"no stored output yet: run `python benchmarks/results.py --sections {name}`"
                 )
                 lines += [f"## {section.title}", "", missing + ".", ""]
-    # Sections link their pictures by bare name, beside them in ``results``.
-    folder = os.path.relpath(results, os.path.dirname(os.path.abspath(output)))
-    text = re.sub(r"!\[([^\]]*)\]\(([^)/]+\.png)\)", rf"![\1]({folder}/\2)", "\n".join(lines))
     with open(output, "w") as stream:
-        stream.write(text)
+        stream.write("\n".join(lines))
     print(f"wrote {output}", file=sys.stderr)
 
 

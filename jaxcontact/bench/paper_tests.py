@@ -55,6 +55,7 @@ def _detectors(scene, plans):
 
 
 def _plans(scene):
+    """``(contact plan, path plan)`` sized for ``scene``, made on the host."""
     return (
         plan_buckets(scene.x, scene.surface, radius=scene.radius),
         plan_buckets(scene.x, scene.surface, x_prev=scene.x_prev),
@@ -66,9 +67,8 @@ def _checks(scene, results) -> dict:
     x = np.asarray(scene.x)
     start, end = _run.endpoints(scene.surface)
     reference = oracle.reference_contact(x, start, end, scene.radius)
-    crossing = baselines.brute_crossing(
-        np, np.asarray(scene.x_prev, np.float64), x.astype(np.float64), start * 1.0, end * 1.0
-    )
+    x_prev, x64, start64, end64 = (np.asarray(a, np.float64) for a in (scene.x_prev, x, start, end))
+    crossing = baselines.brute_crossing(np, x_prev, x64, start64, end64)
     checks = {}
     for name, result in results.items():
         if name in ("all_to_all", "bucket_sort"):
@@ -80,6 +80,7 @@ def _checks(scene, results) -> dict:
 
 
 def _rows(test, scene, position, timings, checks) -> list[dict]:
+    """One row per method: its timing and its check against the float64 answer."""
     rows = []
     nodes, segments = scene.x.shape[0], scene.surface.segments.shape[0]
     for name in METHODS:

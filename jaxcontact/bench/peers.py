@@ -76,7 +76,7 @@ def _skip_reason(name, x, start, end, radius, quick) -> str | None:
     return baselines.unavailable(name) if name in baselines.PEERS else None
 
 
-def _methods(scene, x, start, end):
+def _methods(scene):
     """name -> (fn, args): the library's two detectors, then the peers."""
     radius = scene.radius
     plan = plan_buckets(scene.x, scene.surface, radius=radius)
@@ -96,6 +96,11 @@ def _methods(scene, x, start, end):
 
 
 def run_scene(kind, size, parameter, repeats, slow_s, quick=False) -> list[dict]:
+    """Every method on one scene: checked, then timed round-robin; one row per method.
+
+    ``kind`` is ``"rough die"`` (``parameter``: its segment count) or a
+    cutting scene (``parameter``: the tool tip's x); ``size`` the slave count.
+    """
     scene = build(kind, size, parameter)
     x = np.asarray(scene.x)
     start, end = _run.endpoints(scene.surface)
@@ -103,7 +108,7 @@ def run_scene(kind, size, parameter, repeats, slow_s, quick=False) -> list[dict]
     label = f"{kind}" + (f", M={parameter:,}" if kind == "rough die" else "")
     position = "" if kind == "rough die" else f"x_tip={parameter}"
     rows, timed, single = [], {}, {}
-    for name, method in _methods(scene, x, start, end).items():
+    for name, method in _methods(scene).items():
         reason = _skip_reason(name, x, start, end, scene.radius, quick)
         if reason:
             rows.append(_run.row(label, len(x), len(start), name, position=position, note=reason))
