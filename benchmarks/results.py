@@ -125,11 +125,21 @@ def machine() -> list[str]:
     ]
 
 
-def assemble(results: str, output: str) -> None:
-    """Writes ``output`` from ``notes.md`` and every stored section, in registry order."""
+def _demoted(body: str) -> str:
+    """``body`` with its headings two levels down (under the section's), code blocks untouched."""
+    lines, in_code = [], False
+    for line in body.splitlines():
+        in_code ^= line.startswith("```")
+        if not in_code and re.match(r"#{1,4} ", line):
+            line = "##" + line
+        lines.append(line)
+    return "\n".join(lines)
+
+
+def assemble(results: str, output: str, notes: str) -> None:
+    """Writes ``output`` from ``notes`` and every stored section, in registry order."""
     lines = ["# Benchmark results", "", *machine(), ""]
     folder = os.path.relpath(results, os.path.dirname(os.path.abspath(output)))
-    notes = os.path.join(results, "notes.md")
     if os.path.exists(notes):
         with open(notes) as stream:
             lines += [stream.read().strip(), ""]
@@ -139,17 +149,17 @@ def assemble(results: str, output: str) -> None:
             if os.path.exists(stored):
                 with open(stored) as stream:
                     body = stream.read().strip()
-                # Sections bring their own level-2 headings; keep them under this one.
-                body = body.replace("\n## ", "\n### ")
+                body = _demoted(body)
                 if "{out}" in section.args:
                     # Their pictures are linked by name, beside them in ``results``.
                     body = re.sub(r"!\[([^\]]*)\]\(([^):]+\.png)\)", rf"![\1]({folder}/\2)", body)
                 lines += [f"## {section.title}{how}", "", body, ""]
+            elif not suffix and not os.path.exists(os.path.join(HERE, section.script)):
+                missing = f"`benchmarks/{section.script}` is not in this checkout."
+                lines += [f"## {section.title}", "", missing, ""]
             elif not suffix:
-                missing = (
-                    f"no stored output yet: run `python benchmarks/results.py --sections {name}`"
-                )
-                lines += [f"## {section.title}", "", missing + ".", ""]
+                missing = f"Not run yet: `python benchmarks/results.py --sections {name}`."
+                lines += [f"## {section.title}", "", missing, ""]
     with open(output, "w") as stream:
         stream.write("\n".join(lines))
     print(f"wrote {output}", file=sys.stderr)
@@ -163,6 +173,7 @@ def main(argv=None) -> int:
     parser.add_argument("--pinned", action="store_true", help="run under taskset -c 0")
     parser.add_argument("--results", default=os.path.join(HERE, "results"))
     parser.add_argument("--output", default=os.path.join(HERE, "RESULTS.md"))
+    parser.add_argument("--notes", default=os.path.join(HERE, "results", "notes.md"))
     args = parser.parse_args(argv)
     names = args.sections.split(",")
     unknown = sorted(set(names) - set(SECTIONS))
@@ -171,7 +182,7 @@ def main(argv=None) -> int:
     if not args.assemble_only:
         for name in names:
             run_section(name, args.results, args.quick, args.pinned)
-    assemble(args.results, args.output)
+    assemble(args.results, args.output, args.notes)
     return 0
 
 
