@@ -7,6 +7,7 @@ answer is reported as wrong.
 
 import csv
 import functools
+import pathlib
 
 import jax
 import numpy as np
@@ -138,3 +139,33 @@ def test_library_rows_check_against_reference():
 def test_cli_registers_bench():
     args = _parser().parse_args(["bench", "--quick", "--out", "somewhere"])
     assert args.quick and args.out == "somewhere" and callable(args.run)
+
+
+def _results_module():
+    import importlib.util
+
+    path = pathlib.Path(__file__).resolve().parent.parent / "benchmarks" / "results.py"
+    spec = importlib.util.spec_from_file_location("benchmark_results", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_results_assembles_stored_sections(tmp_path):
+    results = _results_module()
+    stored = tmp_path / "results"
+    stored.mkdir()
+    (stored / "peers.md").write_text("## Peers\n\ntable\n\n![peers.png](peers.png)\n")
+    (stored / "bucket.md").write_text("```\n# bucket.py: a comment line\n```\n")
+    notes = tmp_path / "notes.md"
+    notes.write_text("Hand-written headline.")
+    output = tmp_path / "RESULTS.md"
+    results.assemble(str(stored), str(output), str(notes))
+    text = output.read_text()
+    assert text.startswith("# Benchmark results\n\n- Machine:")
+    assert "Hand-written headline." in text
+    assert "#### Peers" in text and "![peers.png](results/peers.png)" in text
+    assert "\n# bucket.py: a comment line\n" in text  # code blocks are left as they are
+    assert "Not run yet: `python benchmarks/results.py --sections dense`" in text
+    if not (pathlib.Path(results.HERE) / "stability.py").exists():
+        assert "`benchmarks/stability.py` is not in this checkout." in text
