@@ -28,8 +28,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--quick", action="store_true", help="small sizes: under two minutes")
     parser.add_argument("--out", default="jaxcontact-bench", help="folder for CSV and PNG files")
     parser.add_argument(
-        "--only", default=",".join(MODULES), help=f"benchmarks to run, of {','.join(MODULES)}"
+        "--only",
+        default=",".join(MODULES),
+        type=_names,
+        help=f"benchmarks to run, of {','.join(MODULES)}",
     )
+
+
+def _names(text: str) -> list[str]:
+    names = text.split(",")
+    unknown = [name for name in names if name not in MODULES]
+    if unknown:
+        raise argparse.ArgumentTypeError(f"expected names from {MODULES}; got {unknown}")
+    return names
 
 
 def run_all(args: argparse.Namespace) -> int:
@@ -38,10 +49,7 @@ def run_all(args: argparse.Namespace) -> int:
 
     import jax
 
-    names = args.only.split(",")
-    unknown = [name for name in names if name not in MODULES]
-    if unknown:
-        raise ValueError(f"--only: expected names from {MODULES}; got {unknown}")
+    names = args.only if isinstance(args.only, list) else _names(args.only)
     jax.config.update("jax_enable_x64", True)  # float64 oracle scenes and variants
     began = time.perf_counter()
     for name in names:
