@@ -65,6 +65,7 @@ def test_compare_reports_every_kind_of_wrong_answer():
     wrong = oracle.compare(segment, gap, found, x, start, end, reference)
     assert (wrong.missed, wrong.false, wrong.wrong_segment) == (1, 1, 1)
     assert wrong.max_gap_error >= 0.01
+    assert wrong.wrong_by > 0
     assert "1 missed" in oracle.describe(wrong) and "1 wrong segment" in oracle.describe(wrong)
 
 

@@ -37,6 +37,7 @@ COLUMNS = (
     "ties",
     "wrong_segment",
     "max_gap_error",
+    "wrong_by",
     "note",
 )
 
@@ -55,6 +56,7 @@ def row(scene, nodes, segments, method, timing=None, mismatch=None, **fields) ->
     if mismatch is not None:
         out.update(mismatch._asdict())
         out["max_gap_error"] = f"{mismatch.max_gap_error:.3g}"
+        out["wrong_by"] = f"{mismatch.wrong_by:.3g}"
     out.update(fields)
     return out
 

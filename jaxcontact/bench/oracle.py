@@ -36,6 +36,7 @@ class Mismatch(NamedTuple):
     ties: int  # both found, another segment at exactly the reference's distance
     wrong_segment: int  # both found, another segment that is farther: a real error
     max_gap_error: float  # largest |gap - reference gap| where both found (ties: that segment's)
+    wrong_by: float  # how much farther the farthest wrong segment is than the closest (0: none)
 
 
 def _project(x, start, end):
@@ -151,23 +152,27 @@ def compare(segment, gap, found, x, start, end, reference: Reference) -> Mismatc
     ties = other & (distance == reference_distance)
     expected = np.where(ties, own_gap, reference.gap)
     errors = np.abs(gap - expected)[both & ~(other & ~ties)]
+    # Wrong segments by float32 rounding are farther by about an ulp of the coordinates.
+    excess = (distance - reference_distance)[other & ~ties]
     return Mismatch(
         missed=int(np.sum(reference.found & ~found)),
         false=int(np.sum(found & ~reference.found)),
         ties=int(ties.sum()),
         wrong_segment=int(np.sum(other & ~ties)),
         max_gap_error=float(errors.max()) if errors.size else 0.0,
+        wrong_by=float(excess.max()) if excess.size else 0.0,
     )
 
 
 def describe(mismatch: Mismatch) -> str:
     """One short line: ``"exact"`` or the counts that are not zero."""
+    wrong = f"wrong segment (up to {mismatch.wrong_by:.2g} farther)"
     parts = [
         f"{count:,} {label}"
         for count, label in (
             (mismatch.missed, "missed"),
             (mismatch.false, "false"),
-            (mismatch.wrong_segment, "wrong segment"),
+            (mismatch.wrong_segment, wrong),
             (mismatch.ties, "ties"),
         )
         if count
