@@ -89,7 +89,6 @@ def test_a_missing_peer_is_reported_not_raised(monkeypatch):
 
 
 def test_peer_rows_and_csv(tmp_path, monkeypatch):
-    pytest.importorskip("scipy")
     # Only the dense NumPy peer and the skip path, to stay fast.
     monkeypatch.setattr(
         baselines, "PEERS", {k: baselines.PEERS[k] for k in ("NumPy dense", "NumPy box-then-dense")}
