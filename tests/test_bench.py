@@ -9,11 +9,9 @@ import csv
 import functools
 import pathlib
 
-import jax
 import numpy as np
 import pytest
 
-from jaxcontact import all_to_all
 from jaxcontact._cli import _parser
 from jaxcontact._timing import time_interleaved
 from jaxcontact.bench import _run, baselines, oracle, peers
@@ -127,15 +125,6 @@ def test_time_interleaved_runs_each_call_round_robin():
     assert order == ["a", "b"] + ["a", "b"] * 3  # first calls, then three rounds
 
 
-def test_library_rows_check_against_reference():
-    scene = cutting_scene(500, 18.0)
-    x, start, end = _scene_arrays(scene)
-    reference = oracle.reference_contact(x, start, end, scene.radius)
-    contact = jax.jit(functools.partial(all_to_all, radius=scene.radius))(scene.x, scene.surface)
-    mismatch = _run.check(contact, x, start, end, reference)
-    assert (mismatch.missed, mismatch.false, mismatch.wrong_segment) == (0, 0, 0)
-
-
 def test_cli_registers_bench():
     args = _parser().parse_args(["bench", "--quick", "--out", "somewhere"])
     assert args.quick and args.out == "somewhere" and callable(args.run)
@@ -169,3 +158,29 @@ def test_results_assembles_stored_sections(tmp_path):
     assert "Not run yet: `python benchmarks/results.py --sections dense`" in text
     if not (pathlib.Path(results.HERE) / "stability.py").exists():
         assert "`benchmarks/stability.py` is not in this checkout." in text
+
+
+def test_a_plan_too_small_is_counted_as_missed_contacts():
+    from jaxcontact import bucket_sort, plan_buckets
+    from jaxcontact.bench import time_vs_error
+
+    scene = cutting_scene(2_000, 18.0)
+    x, start, end = _scene_arrays(scene)
+    reference = oracle.reference_contact(x, start, end, scene.radius)
+    plan = plan_buckets(scene.x, scene.surface, radius=scene.radius)
+    small = time_vs_error._shrunk(plan, block_capacity=0.25)
+    assert small.block_capacity == max(1, int(plan.block_capacity * 0.25))
+    contact = bucket_sort(scene.x, scene.surface, radius=scene.radius, plan=small)
+    mismatch = _run.check(contact, x, start, end, reference)
+    assert bool(contact.overflow) and mismatch.missed > 0
+
+
+def test_paper_test1_rows():
+    from jaxcontact.bench import paper_tests
+
+    rows = paper_tests.run_test1((1,), repeats=1)
+    assert [row["method"] for row in rows] == list(paper_tests.METHODS)
+    assert all(row["nodes"] == 4 and row["median_ms"] > 0 for row in rows)
+    assert rows[0]["note"] == "same contacts"  # all_to_all against the float64 oracle
+    assert "0 rows differ" in rows[2]["note"]  # swept against the float64 brute force
+    assert "| all_to_all |" in paper_tests.averages(rows)
