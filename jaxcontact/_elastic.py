@@ -132,7 +132,7 @@ def stresses(mesh: Mesh, displacement: Array, material: Material) -> Array:
     gradient = jnp.einsum("eai,eaj->eij", displacement[mesh.triangles], mesh.gradients)
     strain = (gradient + jnp.swapaxes(gradient, 1, 2)) / 2
     trace = strain[:, 0, 0] + strain[:, 1, 1]
-    return lam * trace[:, None, None] * jnp.eye(2, dtype=strain.dtype) + 2 * mu * strain
+    return lam * trace[:, None, None] * jnp.eye(2, dtype=strain.dtype)[None] + 2 * mu * strain
 
 
 def internal_forces(mesh: Mesh, displacement: Array, material: Material) -> Array:

@@ -94,7 +94,7 @@ def tool_outline(x_tip, rake) -> Array:
     centre = tip + bisector * EDGE_RADIUS / jnp.sin(wedge / 2)
     unit = jnp.linspace(0.0, 1.0, ARC_SEGMENTS + 1, dtype=dtype)
     angles = (math.pi - rake) + unit * (1.5 * math.pi + CLEARANCE - (math.pi - rake))
-    arc = centre + EDGE_RADIUS * jnp.stack([jnp.cos(angles), jnp.sin(angles)], axis=-1)
+    arc = centre[None, :] + EDGE_RADIUS * jnp.stack([jnp.cos(angles), jnp.sin(angles)], axis=-1)
     return jnp.concatenate([arc, jnp.stack([flank_end, back, rake_end])])
 
 
@@ -152,6 +152,7 @@ class History(NamedTuple):
     penetration: Array  # f[T]  deepest penetration -min(gap) of active slaves (mm)
     signature: Array  # i32[T]  sum over active slaves of (segment + 1): the contact set's print
     rebuilt: Array  # bool[T]  the candidate list was found again at this step
+    energy: Array  # f[T]  kinetic + strain energy of the workpiece at the step (N mm per mm)
 
 
 class Final(NamedTuple):
@@ -294,8 +295,12 @@ def run(
         else:
             expired, contact = jnp.zeros((), bool), at_rest
         on_slaves, on_tool = contact_forces(contact, controls.stiffness)
-        force = internal_forces(mesh, u, material) + on_nodes(on_slaves)
-        v = decay * v + kick * inverse_mass * force
+        elastic = internal_forces(mesh, u, material)
+        force = elastic + on_nodes(on_slaves)
+        v_before, v = v, decay * v + kick * inverse_mass * force
+        # Leapfrog's own energy: the kinetic part from the velocities either
+        # side of the step (the one central differences conserve, undamped).
+        energy = (jnp.sum(mesh.mass[:, None] * v_before * v) - jnp.sum(u * elastic)) / 2
         u = u + dt * v
         depth = jnp.where(contact.active, -contact.gap, 0)
         row = History(
@@ -305,6 +310,7 @@ def run(
             jnp.max(depth, initial=0),
             jnp.sum(jnp.where(contact.active, contact.segment + 1, 0)),
             expired,
+            energy,
         )
         carry = (u, v, near, overflow | contact.overflow, rebuilds + expired.astype(jnp.int32))
         return carry, row
