@@ -4,8 +4,9 @@ Runs ``simulate.run`` once for its results (replanning on overflow), then
 times it: the whole scan, and the same scan with detection replaced by a
 fixed contact result (``run(..., detect=False)``: the same elastic update,
 the same force assembly, no ``candidates_expired``, ``find_candidates`` or
-``bucket_sort``). The detection share is ``1 - (without / with)``: what
-detection adds to a step, measured in the compiled loop where it runs.
+``bucket_sort``), the two in alternation. The detection share is the median
+over those pairs of ``1 - without / with``: what detection adds to a step,
+measured in the compiled loop where it runs.
 The numbers are printed; the PNGs are drawn only when matplotlib is installed.
 """
 
@@ -21,7 +22,7 @@ import numpy as np
 
 from jaxcontact import all_to_all
 from jaxcontact._elastic import stresses, von_mises
-from jaxcontact._timing import pinned_note, time_call
+from jaxcontact._timing import Timing, pinned_note
 from jaxcontact.simulate import History, ploughing, run, simulate, tool_surface
 
 
@@ -50,29 +51,33 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def run_demo(nodes: int, travel: float, repeats: int, dtype) -> tuple[Summary, tuple]:
-    """Sets up, runs and times the simulation; returns the summary and what to draw."""
-    mesh, controls, config = ploughing(nodes, travel=travel, dtype=dtype)
+def run_demo(
+    nodes: int, travel: float, repeats: int, dtype, slaves: str = "surface"
+) -> tuple[Summary, tuple]:
+    """Sets up, runs and times the simulation; returns the summary and what to draw.
+
+    What to draw: ``(mesh, controls, config, final, history, with_detection,
+    without)``, the last two the ``Timing`` s of the whole scan.
+    """
+    mesh, controls, config = ploughing(nodes, travel=travel, dtype=dtype, slaves=slaves)
     start = time.perf_counter()
     final, history, config = simulate(mesh, controls, config)
     first_s = time.perf_counter() - start  # compilation and one run
 
-    # ``run`` is jitted with ``config`` static: the first reuses the executable
-    # ``simulate`` compiled (called the same way: jit's cache tells an omitted
-    # keyword from a passed one).
-    with_detection, without = (
-        time_call(call, mesh, controls, repeats=repeats, warmup=1)
-        for call in (
-            lambda mesh, controls: run(mesh, controls, config),
-            lambda mesh, controls: run(mesh, controls, config, detect=False),
-        )
+    # ``run`` is jitted with ``config`` static: the first call reuses the
+    # executable ``simulate`` compiled (called the same way: jit's cache tells
+    # an omitted keyword from a passed one).
+    calls = (
+        lambda: run(mesh, controls, config),
+        lambda: run(mesh, controls, config, detect=False),
     )
+    with_detection, without, share = _paired_timings(calls, repeats)
     history = jax.tree.map(np.asarray, history)
     summary = Summary(
         nodes=int(mesh.nodes.shape[0]),
         steps=config.steps,
         steps_per_s=config.steps / with_detection.median_s,
-        detection_share=1 - without.median_s / with_detection.median_s,
+        detection_share=share,
         rebuilds=int(final.rebuilds),
         most_active=int(history.active.max()),
         penetration_ratio=float(history.penetration.max()) / config.radius,
@@ -80,6 +85,29 @@ def run_demo(nodes: int, travel: float, repeats: int, dtype) -> tuple[Summary, t
         first_s=first_s,
     )
     return summary, (mesh, controls, config, final, history, with_detection, without)
+
+
+def _paired_timings(calls, repeats: int) -> tuple[Timing, Timing, float]:
+    """Times the two scans in alternation, ``repeats`` pairs after a warm-up pair.
+
+    Alternating keeps a change of machine load from falling on one of them
+    only. Returns their ``Timing`` s (``compile_s``: the warm-up call) and the
+    detection share, the median over pairs of ``1 - without / with``.
+    """
+    warmup = [_elapsed(call) for call in calls]
+    runs = np.array([[_elapsed(call) for call in calls] for _ in range(max(1, repeats))])
+    timings = []
+    for column, first in zip(runs.T, warmup, strict=True):
+        p10, median, p90 = np.percentile(column, [10, 50, 90])
+        timings.append(Timing(first, float(median), float(p10), float(p90), len(column)))
+    share = float(np.median(1 - runs[:, 1] / runs[:, 0]))
+    return timings[0], timings[1], share
+
+
+def _elapsed(call) -> float:
+    start = time.perf_counter()
+    jax.block_until_ready(call())
+    return time.perf_counter() - start
 
 
 def main(args: argparse.Namespace) -> int:
