@@ -46,8 +46,8 @@ import numpy as np
 from jaxcontact._bucket import bucket_sort, candidates_expired, find_candidates
 from jaxcontact._elastic import Material, Mesh, internal_forces, smallest_altitude
 from jaxcontact._elastic import workpiece_mesh as workpiece_mesh
-from jaxcontact._plan import BucketPlan, replan
-from jaxcontact._shard import contact_forces, plan_batch
+from jaxcontact._plan import BucketPlan, plan_buckets, replan
+from jaxcontact._shard import contact_forces
 from jaxcontact._types import Array, Surface
 
 # The cutting scene's tool (SCENES.md): clearance angle, face length, edge
@@ -61,6 +61,7 @@ ARC_SEGMENTS = 16
 MASS_SCALED_STEEL = Material(mass_scale=1e4)
 
 
+@jax.jit
 def tool_outline(x_tip, rake) -> Array:
     """f[20, 2]: the cutting scene's tool outline for a rake angle, in jnp.
 
@@ -236,15 +237,19 @@ def ploughing(
     steps = max(1, math.ceil(travel / (speed * dt)))
     rake = math.radians(rake_degrees)
     x_tip_end = x_tip_start - speed * dt * steps
-    tools = [tool_surface(x_tip, rake) for x_tip in (x_tip_start, x_tip_end)]
+    # One plan for the tool at both ends of its travel: planned against the
+    # two outlines together, it keeps every block either one keeps.
+    ends = [np.asarray(tool_outline(x_tip, rake)) for x_tip in (x_tip_start, x_tip_end)]
+    count = len(ends[0])
+    starts = np.arange(2 * count)
+    both = Surface(
+        jnp.asarray(np.concatenate(ends), dtype),
+        jnp.asarray(np.stack([starts, starts // count * count + (starts + 1) % count], axis=-1)),
+    )
     slave_nodes = nodes if slaves == "all" else nodes[np.asarray(mesh.boundary)]
-    plan = plan_batch(
-        np.stack([slave_nodes, slave_nodes]).astype(dtype),
-        Surface(jnp.stack([tool.nodes for tool in tools]).astype(dtype),
-                jnp.stack([tool.segments for tool in tools])),
-        radius=radius + skin,
-        slack=slack,
-    )  # fmt: skip
+    plan = plan_buckets(
+        jnp.asarray(slave_nodes, dtype), both, radius=radius + skin, slack=slack, use_cells=False
+    )
     config = Ploughing(
         steps, dt, speed, x_tip_start, radius, skin, damping, material, plan, slaves == "all"
     )
@@ -326,6 +331,10 @@ def run(
         return carry, row
 
     begin = (zero, zero, near, near.overflow, jnp.zeros((), jnp.int32))
+    # Rematerialised under differentiation: the backward pass keeps only each
+    # step's carry, not every element's intermediates (O(steps x N) either
+    # way, but some twenty times less).
+    step = jax.checkpoint(step, prevent_cse=False)
     (u, v, _, overflow, rebuilds), history = jax.lax.scan(step, begin, jnp.arange(config.steps))
     return Final(u, v, overflow, rebuilds), history
 
