@@ -152,7 +152,12 @@ def _parser() -> argparse.ArgumentParser:
     demo = commands.add_parser(
         "demo", help="run the ploughing simulation (or --scene paper) and draw it"
     )
-    demo.add_argument("--scene", choices=("ploughing", "paper"), default="ploughing")
+    demo.add_argument(
+        "--scene",
+        choices=("ploughing", "paper"),
+        default="ploughing",
+        help="ploughing: the simulation (default); paper: the paper's scene, Test 1",
+    )
     demo.add_argument("--out", default="jaxcontact-demo", help="folder for the PNGs")
     demo.add_argument(
         "--n", type=_positive_int, default=250, help="paper: (n+1)^2 nodes (default 250)"

@@ -40,14 +40,30 @@ class Summary(NamedTuple):
     first_s: float  # compilation and the first run
 
 
+def _at_least(least: int, kind):
+    def parse(text: str):
+        value = kind(text)
+        if not value >= least:
+            raise argparse.ArgumentTypeError(f"must be at least {least}; got {value}")
+        return value
+
+    return parse
+
+
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """The simulation demo's options, on the ``demo`` subcommand."""
     parser.add_argument(
-        "--nodes", type=int, default=10_000, help="workpiece nodes, about (default 10,000)"
+        "--nodes",
+        type=_at_least(4, int),
+        default=10_000,
+        help="workpiece nodes, about (default 10,000)",
     )
     parser.add_argument("--travel", type=float, default=0.5, help="tool travel in mm (default 0.5)")
     parser.add_argument(
-        "--repeats", type=int, default=5, help="timed runs of the whole scan (default 5)"
+        "--repeats",
+        type=_at_least(1, int),
+        default=5,
+        help="timed runs of the whole scan (default 5)",
     )
 
 

@@ -167,3 +167,14 @@ def test_demo_command(tmp_path, capsys):
         "ploughing_mesh.png",
         "ploughing_forces.png",
     }
+
+
+def test_demo_paper_scene_still_runs(tmp_path, capsys):
+    assert _cli.main(["demo", "--scene", "paper", "--n", "9", "--out", str(tmp_path)]) == 0
+    assert "paper scene, Test 1: n=9 (100 nodes)" in capsys.readouterr().out
+
+
+def test_demo_rejects_bad_sizes(capsys):
+    with pytest.raises(SystemExit):
+        _cli.main(["demo", "--nodes", "3"])
+    assert "must be at least 4" in capsys.readouterr().err
