@@ -9,7 +9,10 @@ a depth of cut of 1. Every step:
 
 1. the tool's outline at its current place (``tool_outline``, jnp, so the
    run is differentiable in the rake angle);
-2. contact by ``bucket_sort`` reusing a candidate list found with a skin;
+2. contact by ``bucket_sort`` for the slaves (by default the nodes of the
+   workpiece's free outline, which meet the tool before any interior node
+   can; ``slaves="all"`` takes every node, as the cutting scene does),
+   reusing a candidate list found with a skin;
    the list is found again (``lax.cond``) only when ``candidates_expired``
    says the nodes and the tool together moved more than the skin, as the
    paper recomputes ``d_max`` only every n-th step;
