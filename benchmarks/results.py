@@ -54,7 +54,7 @@ SECTIONS = {
         "Time against error", "time_vs_error.py", ("--out", "{out}"), "{out}/time_vs_error.md"
     ),
     "stability": Section("Stability", "stability.py", (), "benchmarks/RESULTS_stability.md"),
-    "simulate": Section("Simulation", "simulate.py", (), "benchmarks/RESULTS_simulate.md"),
+    "simulate": Section("Simulation", "simulate.py"),
 }
 VERSIONED = ("jax", "jaxlib", "numpy", "scipy", "shapely", "matplotlib", "jax-md", "libigl")
 

@@ -36,6 +36,8 @@ def main() -> None:
 
     print(f"jax {jax.__version__} on {jax.devices()[0].device_kind}; {pinned_note()}")
     print(f"\ntool travel {travel} mm at 3 m/s, steel with mass scaling 1e4, float32\n")
+    # The method, with the table, so that RESULTS.md (benchmarks/results.py) carries it.
+    print(" ".join(__doc__.split("\n\n", 2)[2].split()) + "\n")
     print(
         "| nodes | slaves | steps | steps/s | scan s (p10-p90) | without detection s "
         "| detection share | list rebuilds | compile + 1st run s |"
