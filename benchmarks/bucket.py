@@ -33,6 +33,11 @@ from jaxcontact import (
     swept,
 )
 from jaxcontact._timing import pinned_note, time_call
+from jaxcontact.bench.baselines import (
+    kdtree_pairs_project,
+    kdtree_project,
+    numpy_box_then_dense,
+)
 from jaxcontact.scenes import cutting_scene, paper_scene, rough_die_scene
 
 ROWS: list[tuple] = []
@@ -58,9 +63,12 @@ def report(section, method, nodes, segments, timing, compile_s, check, baseline_
 
 
 def mismatches(contact, reference) -> str:
-    """Rows whose segment or found flag differs from the float64 reference."""
+    """Rows whose segment or found flag differs from the float64 reference.
+
+    ``contact`` is ``(segment, found)`` or a peer's ``(segment, gap, found)``.
+    """
     segment = np.asarray(contact[0])
-    found = np.asarray(contact[1])
+    found = np.asarray(contact[-1])
     wrong = (segment != np.asarray(reference.segment)) | (found != np.asarray(reference.found))
     return f"{int(wrong.sum())} of {int(np.asarray(reference.found).sum())} found differ"
 
@@ -72,84 +80,7 @@ def reference_contact(scene, radius):
 
 
 # ----------------------------------------------------------------------------
-# CPU baselines, written as a user would with NumPy and SciPy.
-
-
-def numpy_project(x, start, end, radius):
-    """Dense NumPy projection of slaves ``x`` (S, 2) on segments: (segment, found)."""
-    d = end - start
-    length_squared = np.einsum("mk,mk->m", d, d)
-    from_a = x[:, None, :] - start[None]
-    xi = np.clip(np.einsum("smk,mk->sm", from_a, d) / length_squared, 0, 1)
-    offset = from_a - xi[..., None] * d[None]
-    distance_squared = np.einsum("smk,smk->sm", offset, offset)
-    best = np.argmin(distance_squared, axis=1)
-    found = distance_squared[np.arange(len(x)), best] <= radius * radius
-    return np.where(found, best, -1), found
-
-
-def numpy_box_then_dense(x, start, end, radius):
-    """The paper's preliminary phase in NumPy: slaves in the inflated tool box, then dense."""
-    low = np.minimum(start, end).min(axis=0) - radius
-    high = np.maximum(start, end).max(axis=0) + radius
-    inside = np.flatnonzero(np.all((x >= low) & (x <= high), axis=1))
-    segment = np.full(len(x), -1)
-    found = np.zeros(len(x), bool)
-    if inside.size:
-        segment[inside], found[inside] = numpy_project(x[inside], start, end, radius)
-    return segment, found
-
-
-def _closest_pairs(x, start, end, radius, slave, pair_segment):
-    """(segment, found) per slave from candidate pairs, by NumPy projection."""
-    a, d = start[pair_segment], end[pair_segment] - start[pair_segment]
-    from_a = x[slave] - a
-    xi = np.clip(np.einsum("pk,pk->p", from_a, d) / np.einsum("pk,pk->p", d, d), 0, 1)
-    offset = from_a - xi[:, None] * d
-    distance_squared = np.einsum("pk,pk->p", offset, offset)
-    # Per slave, the closest pair: sort by (slave, distance, segment) and take the first.
-    order = np.lexsort((pair_segment, distance_squared, slave))
-    first = order[np.r_[True, slave[order][1:] != slave[order][:-1]]] if order.size else order
-    segment = np.full(len(x), -1)
-    found = np.zeros(len(x), bool)
-    close = distance_squared[first] <= radius * radius
-    segment[slave[first][close]] = pair_segment[first][close]
-    found[slave[first][close]] = True
-    return segment, found
-
-
-def _midpoint_reach(start, end, radius):
-    """Segment midpoints, and the ball around them that holds every slave within radius."""
-    middle = (start + end) / 2
-    return middle, radius + np.max(np.linalg.norm(end - start, axis=1)) / 2
-
-
-def kdtree_project(x, start, end, radius):
-    """scipy's cKDTree on segment midpoints, a ball query per slave, then NumPy projection.
-
-    The first thing a user writes: ``query_ball_point`` returns Python lists.
-    """
-    from scipy.spatial import cKDTree
-
-    middle, reach = _midpoint_reach(start, end, radius)
-    lists = cKDTree(middle).query_ball_point(x, reach, return_sorted=False)
-    counts = np.fromiter((len(v) for v in lists), int, len(lists))
-    slave = np.repeat(np.arange(len(x)), counts)
-    pair_segment = np.fromiter((s for v in lists for s in v), int, counts.sum())
-    return _closest_pairs(x, start, end, radius, slave, pair_segment)
-
-
-def kdtree_pairs_project(x, start, end, radius):
-    """The same with both point sets in trees and every pair found at once.
-
-    ``sparse_distance_matrix(..., output_type="ndarray")`` returns the pairs as
-    arrays, with no Python loop: the fastest cKDTree route we found.
-    """
-    from scipy.spatial import cKDTree
-
-    middle, reach = _midpoint_reach(start, end, radius)
-    pairs = cKDTree(x).sparse_distance_matrix(cKDTree(middle), reach, output_type="ndarray")
-    return _closest_pairs(x, start, end, radius, pairs["i"], pairs["j"])
+# CPU baselines: the peers of jaxcontact/bench/baselines.py, shared with peers.py.
 
 
 def differ_from_kdtree(x, start, end, segment, kd_segment) -> str:

@@ -38,58 +38,9 @@ import numpy as np
 
 from jaxcontact import all_to_all, swept
 from jaxcontact._timing import pinned_note, time_call
+from jaxcontact.bench.baselines import brute_crossing
+from jaxcontact.bench.baselines import dense_closest as brute_closest
 from jaxcontact.scenes import cutting_scene, paper_scene
-
-
-def cross(u, v):
-    """z-component of the cross product of 2D vectors along the last axis."""
-    return u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]
-
-
-def brute_closest(xp, x, start, end, radius):
-    """Textbook brute force: ``(segment, gap, found)`` of every slave.
-
-    Args:
-      xp: the array module, ``numpy`` or ``jax.numpy``.
-      x: f[N, 2] slaves.
-      start: f[M, 2] segment starts.
-      end: f[M, 2] segment ends (no segment of zero length).
-      radius: search radius.
-    """
-    direction = end - start  # f[M, 2]
-    relative = x[:, None, :] - start  # f[N, M, 2]
-    length_squared = xp.sum(direction * direction, axis=-1)
-    xi = xp.clip(xp.sum(relative * direction, axis=-1) / length_squared, 0, 1)
-    offset = relative - xi[..., None] * direction
-    distance_squared = xp.sum(offset * offset, axis=-1)  # f[N, M]
-    segment = xp.argmin(distance_squared, axis=1)
-    rows = xp.arange(x.shape[0])
-    normal = xp.stack([direction[:, 1], -direction[:, 0]], axis=-1)[segment]
-    distance = xp.sqrt(distance_squared[rows, segment])
-    gap = xp.where(xp.sum(offset[rows, segment] * normal, axis=-1) < 0, -distance, distance)
-    found = distance <= radius
-    return xp.where(found, segment, -1), gap, found
-
-
-def brute_crossing(xp, x_prev, x, start, end):
-    """Textbook brute force: ``(segment, t, crossed)`` of every path ``x_prev -> x``.
-
-    Solves ``x_prev + t u = a + s d`` for every pair; parallel pairs never hit.
-    """
-    motion = (x - x_prev)[:, None, :]  # f[N, 1, 2]
-    direction = end - start  # f[M, 2]
-    to_start = start - x_prev[:, None, :]  # f[N, M, 2]
-    denominator = cross(motion, direction)  # f[N, M]
-    parallel = denominator == 0
-    denominator = xp.where(parallel, 1, denominator)
-    t = cross(to_start, direction) / denominator
-    s = cross(to_start, motion) / denominator
-    hit = ~parallel & (t >= 0) & (t <= 1) & (s >= 0) & (s <= 1)
-    times = xp.where(hit, t, xp.inf)
-    segment = xp.argmin(times, axis=1)
-    first = xp.min(times, axis=1)
-    crossed = xp.isfinite(first)
-    return xp.where(crossed, segment, -1), xp.where(crossed, first, 0), crossed
 
 
 def _disagreement(library, baseline) -> str:

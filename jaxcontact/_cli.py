@@ -1,8 +1,9 @@
 """The ``jaxcontact`` command line.
 
-``jaxcontact demo`` runs the source paper's scene (SCENES.md, Test 1) through
-both dense detectors, prints what they found and how long they took, and
-draws the scene near the tool tip. Each subcommand is one ``_<name>`` function
+``jaxcontact demo`` runs the ploughing simulation (``jaxcontact._demo_sim``);
+``jaxcontact demo --scene paper`` runs the source paper's scene (SCENES.md,
+Test 1) through both dense detectors, prints what they found and how long
+they took, and draws the scene near the tool tip. Each subcommand is one ``_<name>`` function
 registered in ``_parser``, so new ones (``bench``) slot in beside it.
 """
 
@@ -16,8 +17,10 @@ import sys
 import jax
 import numpy as np
 
-from jaxcontact import all_to_all, swept
+from jaxcontact import _demo_sim, all_to_all, swept
 from jaxcontact._timing import pinned_note, time_call
+from jaxcontact.bench import add_arguments as add_bench_arguments
+from jaxcontact.bench import run_all as run_bench
 from jaxcontact.scenes import paper_scene
 
 # Drawn around the tool tip T = (50.9, 7): the rake and clearance faces, the
@@ -29,6 +32,8 @@ _PATH_STRIDE = 12
 
 
 def _demo(args: argparse.Namespace) -> int:
+    if args.scene == "ploughing":
+        return _demo_sim.main(args)
     if args.dtype == "float64":
         jax.config.update("jax_enable_x64", True)
     scene = paper_scene(args.n, length=10.0, d=5.0, dtype=np.dtype(args.dtype))
@@ -147,16 +152,26 @@ def _parser() -> argparse.ArgumentParser:
     )
     commands = parser.add_subparsers(dest="command", required=True)
     demo = commands.add_parser(
-        "demo", help="run the paper's scene through all_to_all and swept and draw it"
+        "demo", help="run the ploughing simulation (or --scene paper) and draw it"
     )
-    demo.add_argument("--out", default="jaxcontact-demo", help="folder for the PNG")
     demo.add_argument(
-        "--n", type=_positive_int, default=250, help="grid of (n+1)^2 nodes (default 250)"
+        "--scene",
+        choices=("ploughing", "paper"),
+        default="ploughing",
+        help="ploughing: the simulation (default); paper: the paper's scene, Test 1",
     )
+    demo.add_argument("--out", default="jaxcontact-demo", help="folder for the PNGs")
+    demo.add_argument(
+        "--n", type=_positive_int, default=250, help="paper: (n+1)^2 nodes (default 250)"
+    )
+    _demo_sim.add_arguments(demo)
     demo.add_argument(
         "--dtype", choices=("float32", "float64"), default="float32", help="default float32"
     )
     demo.set_defaults(run=_demo)
+    bench = commands.add_parser("bench", help="run the benchmarks; write CSV and PNG files")
+    add_bench_arguments(bench)
+    bench.set_defaults(run=run_bench)
     return parser
 
 

@@ -58,20 +58,56 @@ def time_call(fn, *args, repeats: int = 20, warmup: int = 2) -> Timing:
       >>> timing.runs, timing.p10_s <= timing.median_s <= timing.p90_s
       (3, True)
     """
-    if repeats < 1:
-        raise ValueError(f"repeats must be at least 1; got {repeats}")
+    return time_interleaved({"fn": (fn, args)}, repeats=repeats, warmup=warmup)["fn"]
+
+
+def compiled_call(fn, args):
+    """``(call, compile_s)``: ``fn`` compiled ahead of time if jitted, else its first call."""
     if hasattr(fn, "lower"):
         start = time.perf_counter()
         call = fn.lower(*args).compile()
-        compile_s = time.perf_counter() - start
-    else:
-        call = fn
-        compile_s = _elapsed(call, args)
-    for _ in range(warmup):
-        _elapsed(call, args)
-    runs = np.array([_elapsed(call, args) for _ in range(repeats)])
-    p10, median, p90 = np.percentile(runs, [10, 50, 90])
-    return Timing(float(compile_s), float(median), float(p10), float(p90), repeats)
+        return call, time.perf_counter() - start
+    return fn, _elapsed(fn, args)
+
+
+def time_interleaved(calls: dict, *, repeats: int = 20, warmup: int = 2) -> dict:
+    """Times several calls round-robin: A, B, C, A, B, C, ... rather than all A first.
+
+    Load that comes and goes on a shared machine then falls on every method
+    alike, so their ratios stay fair even when their absolute times do not.
+    Each call is compiled (or first called) and warmed up as in ``time_call``.
+
+    Args:
+      calls: name -> ``(fn, args)``, ``args`` a tuple of positional arguments.
+      repeats: timed runs of each, at least 1.
+      warmup: untimed runs of each before the first timed round.
+
+    Returns:
+      name -> ``Timing``, in the order of ``calls``.
+
+    Example:
+      >>> import jax, jax.numpy as jnp
+      >>> x = jnp.zeros(4)
+      >>> timings = time_interleaved({"sin": (jax.jit(jnp.sin), (x,)), "cos": (jnp.cos, (x,))},
+      ...                            repeats=3)
+      >>> list(timings), timings["sin"].runs
+      (['sin', 'cos'], 3)
+    """
+    if repeats < 1:
+        raise ValueError(f"repeats must be at least 1; got {repeats}")
+    prepared = {name: (*compiled_call(fn, args), args) for name, (fn, args) in calls.items()}
+    for call, _, args in prepared.values():
+        for _ in range(warmup):
+            _elapsed(call, args)
+    runs = {name: [] for name in prepared}
+    for _ in range(repeats):
+        for name, (call, _, args) in prepared.items():
+            runs[name].append(_elapsed(call, args))
+    timings = {}
+    for name, (_, compile_s, _) in prepared.items():
+        p10, median, p90 = np.percentile(runs[name], [10, 50, 90])
+        timings[name] = Timing(float(compile_s), float(median), float(p10), float(p90), repeats)
+    return timings
 
 
 def pinned_note() -> str:

@@ -1,0 +1,188 @@
+"""What the benchmark modules share: timing rows, CSV and markdown output, a progress bar.
+
+Every benchmark collects ``dict`` rows with the same keys (``COLUMNS``), so
+one CSV writer and one table printer serve them all, and a row carries its
+own oracle check beside its timing.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import os
+import platform
+import sys
+
+import jax
+import numpy as np
+
+from jaxcontact._timing import pinned_note
+from jaxcontact.bench import oracle
+
+COLUMNS = (
+    "scene",
+    "nodes",
+    "segments",
+    "position",
+    "method",
+    "dtype",
+    "compile_s",
+    "median_ms",
+    "p10_ms",
+    "p90_ms",
+    "runs",
+    "ratio",
+    "missed",
+    "false",
+    "ties",
+    "wrong_segment",
+    "max_gap_error",
+    "wrong_by",
+    "note",
+)
+
+
+def row(scene, nodes, segments, method, timing=None, mismatch=None, **fields) -> dict:
+    """One result row; ``timing`` a ``Timing`` (or None: not run), ``mismatch`` an oracle one.
+
+    Example:
+      >>> row("cutting", 10, 20, "NumPy dense", note="skipped")["median_ms"]
+      ''
+    """
+    out = dict.fromkeys(COLUMNS, "")
+    out.update(scene=scene, nodes=nodes, segments=segments, method=method)
+    if timing is not None:
+        out.update(timing_fields(timing))
+    if mismatch is not None:
+        out.update(mismatch._asdict())
+        out["max_gap_error"] = f"{mismatch.max_gap_error:.3g}"
+        out["wrong_by"] = f"{mismatch.wrong_by:.3g}"
+    out.update(fields)
+    return out
+
+
+def timing_fields(timing) -> dict:
+    """The row fields of a ``Timing``: compile seconds, median and spread in ms, runs."""
+    return {
+        "compile_s": "" if timing.compile_s is None else round(timing.compile_s, 3),
+        "median_ms": round(timing.median_s * 1e3, 4),
+        "p10_ms": round(timing.p10_s * 1e3, 4),
+        "p90_ms": round(timing.p90_s * 1e3, 4),
+        "runs": timing.runs,
+    }
+
+
+def answer_of(result):
+    """``(segment, gap, found)`` as NumPy arrays, from a ``Contact`` or a peer's tuple."""
+    if hasattr(result, "found"):
+        return np.asarray(result.segment), np.asarray(result.gap), np.asarray(result.found)
+    return tuple(np.asarray(part) for part in result[:3])
+
+
+def check(result, x, start, end, reference) -> oracle.Mismatch:
+    """The oracle's count of how ``result`` differs from ``reference``."""
+    return oracle.compare(*answer_of(result), x, start, end, reference)
+
+
+def endpoints(surface):
+    """NumPy ``(start, end)`` f[M, 2] of a ``Surface``'s segments."""
+    nodes = np.asarray(surface.nodes)
+    segments = np.asarray(surface.segments)
+    return nodes[segments[:, 0]], nodes[segments[:, 1]]
+
+
+def progress(items, desc: str):
+    """``items`` wrapped in a tqdm bar when tqdm is installed, else a plain counter on stderr."""
+    items = list(items)
+    try:
+        from tqdm import tqdm
+    except ImportError:
+        return _plain_progress(items, desc)
+    return tqdm(items, desc=desc, file=sys.stderr, leave=False)
+
+
+def _plain_progress(items, desc):
+    for index, item in enumerate(items):
+        print(f"{desc}: {index + 1}/{len(items)}", file=sys.stderr, flush=True)
+        yield item
+
+
+def machine() -> str:
+    """One line: the CPU, the cores this process may use, jax and numpy versions."""
+    cpu = platform.processor() or platform.machine()
+    try:
+        with open("/proc/cpuinfo") as info:
+            cpu = next(line.split(":", 1)[1].strip() for line in info if "model name" in line)
+    except (OSError, StopIteration):
+        pass
+    return (
+        f"{cpu}; {pinned_note()}; python {platform.python_version()}, jax {jax.__version__}, "
+        f"numpy {np.__version__}, {jax.devices()[0].device_kind}"
+    )
+
+
+def markdown(rows, columns) -> str:
+    """A markdown table of ``rows`` restricted to ``columns``."""
+    lines = ["| " + " | ".join(columns) + " |", "|" + "---|" * len(columns)]
+    for entry in rows:
+        cells = [f"{entry[c]:,}" if isinstance(entry[c], int) else str(entry[c]) for c in columns]
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def write(out: str, name: str, rows, text: str) -> list[str]:
+    """Writes ``<out>/<name>.csv`` (every column) and ``<out>/<name>.md``; returns the paths."""
+    os.makedirs(out, exist_ok=True)
+    paths = [os.path.join(out, f"{name}.csv"), os.path.join(out, f"{name}.md")]
+    with open(paths[0], "w", newline="") as stream:
+        writer = csv.DictWriter(stream, COLUMNS)
+        writer.writeheader()
+        writer.writerows(rows)
+    with open(paths[1], "w") as stream:
+        stream.write(text)
+    return paths
+
+
+def pyplot(out: str):
+    """matplotlib's pyplot on the headless Agg backend (``out`` made), or None if not installed."""
+    os.makedirs(out, exist_ok=True)
+    try:
+        import matplotlib
+    except ImportError:
+        return None
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def section(name, title, quick, note, body, pictures) -> str:
+    """A benchmark's markdown: heading, command, machine, ``note``, ``body`` lines, pictures."""
+    command = f"python benchmarks/{name}.py{' --quick' if quick else ''}"
+    return "\n".join(
+        [
+            f"## {title}",
+            "",
+            f"`{command}`; {machine()}; {note}",
+            "",
+            *body,
+            "",
+            *[f"![{os.path.basename(p)}]({os.path.basename(p)})" for p in pictures],
+            "",
+        ]
+    )
+
+
+def main(run, description, argv=None, *, slow: bool = False) -> int:
+    """The command line of one benchmark module: parses ``argv``, prints ``run``'s markdown."""
+    parser = argparse.ArgumentParser(description=description)
+    parser.add_argument("--quick", action="store_true", help="small sizes, a smoke test")
+    parser.add_argument("--out", default="jaxcontact-bench", help="folder for CSV and PNG")
+    parser.add_argument("--repeats", type=int, default=None, help="timed runs per method")
+    if slow:
+        parser.add_argument("--slow", type=float, default=None, help="s: time slower ones once")
+    args = parser.parse_args(argv)
+    jax.config.update("jax_enable_x64", True)  # float64 scenes and variants beside float32
+    options = {"slow_s": args.slow} if slow else {}
+    print(run(args.quick, args.out, args.repeats, **options))
+    return 0

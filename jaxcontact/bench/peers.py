@@ -1,0 +1,208 @@
+"""jaxcontact beside its peers: the same closest-segment query, timed in one process.
+
+Scenes (SCENES.md): the cutting scene with the tool in the workpiece
+(``x_tip = 18``) from 10^3 to 10^6 nodes, the same with the tool clear of it
+(``x_tip = 20.5``), and the rough die from (10^4, 10^3) to (10^6, 10^5). On
+each, ``all_to_all`` and ``bucket_sort`` (float32, jit, plan made outside the
+timer) and every peer of ``baselines.PEERS`` that is installed are run
+round-robin; ``ratio`` is a method's median over ``bucket_sort``'s. Every
+answer is checked against the float64 oracle, and each kind of disagreement
+is its own column (missed, false, ties at a shared vertex, wrong segment,
+largest gap error).
+
+A method is skipped, with the reason in its row, where it would hold more
+than ``PAIR_BUDGET`` slave-segment pairs at once (the dense NumPy plane) or
+evaluate more than ``DENSE_BUDGET`` pairs per call (``all_to_all``). A method
+whose first call takes longer than ``--slow`` seconds is timed by that one
+call only.
+
+    python benchmarks/peers.py [--quick] [--out DIR]
+"""
+
+from __future__ import annotations
+
+import functools
+import os
+import time
+
+import jax
+import numpy as np
+
+from jaxcontact import all_to_all, bucket_sort, plan_buckets
+from jaxcontact._timing import Timing, compiled_call, time_interleaved
+from jaxcontact.bench import _run, baselines, oracle
+from jaxcontact.scenes import cutting_scene, rough_die_scene
+
+PAIR_BUDGET = 5e7  # NumPy (N, M, 2) float32 temporaries: about 0.4 GB each
+DENSE_BUDGET = 1.2e9  # all_to_all pairs per call: a few seconds on a CPU core
+
+FULL_SCENES = (
+    *(("cutting, tool in (x_tip=18)", n, 18.0) for n in (1_000, 10_000, 81_939, 1_000_000)),
+    *(("cutting, tool clear (x_tip=20.5)", n, 20.5) for n in (81_939, 1_000_000)),
+    *(("rough die", n, m) for n, m in ((10**4, 10**3), (10**5, 10**4), (10**6, 10**5))),
+)
+QUICK_SCENES = (
+    ("cutting, tool in (x_tip=18)", 10_000, 18.0),
+    ("cutting, tool clear (x_tip=20.5)", 10_000, 20.5),
+    ("rough die", 10**4, 10**3),
+)
+
+
+# Left out of --quick runs, which must finish in two minutes on 2 cores.
+QUICK_SKIPS = {"jax-md cell list": "skipped in --quick: importing jax-md alone takes about 15 s"}
+
+
+def build(kind, size, parameter):
+    if kind == "rough die":
+        return rough_die_scene(size, parameter)
+    return cutting_scene(size, parameter)
+
+
+def _skip_reason(name, x, start, end, radius, quick) -> str | None:
+    """Why ``name`` is not run on this scene, or None."""
+    if quick and name in QUICK_SKIPS:
+        return QUICK_SKIPS[name]
+    pairs = len(x) * len(start)
+    if name == "NumPy dense" and pairs > PAIR_BUDGET:
+        return f"skipped: (N, M) plane of {pairs:.0e} pairs > {PAIR_BUDGET:.0e}"
+    if name == "NumPy box-then-dense":
+        low = np.minimum(start, end).min(axis=0) - radius
+        high = np.maximum(start, end).max(axis=0) + radius
+        inside = int(np.all((x >= low) & (x <= high), axis=1).sum())
+        if inside * len(start) > PAIR_BUDGET:
+            return f"skipped: {inside:,} slaves in the box x {len(start):,} segments > budget"
+    if name == "all_to_all" and pairs > DENSE_BUDGET:
+        return f"skipped: {pairs:.0e} pairs per call > {DENSE_BUDGET:.0e}"
+    return baselines.unavailable(name) if name in baselines.PEERS else None
+
+
+def _methods(scene):
+    """name -> (fn, args): the library's two detectors, then the peers."""
+    radius = scene.radius
+    plan = plan_buckets(scene.x, scene.surface, radius=radius)
+    methods = {
+        "all_to_all": (
+            jax.jit(functools.partial(all_to_all, radius=radius)),
+            (scene.x, scene.surface),
+        ),
+        "bucket_sort": (
+            jax.jit(functools.partial(bucket_sort, radius=radius, plan=plan)),
+            (scene.x, scene.surface),
+        ),
+    }
+    for name, (_, prepare) in baselines.PEERS.items():
+        methods[name] = prepare
+    return methods
+
+
+def run_scene(kind, size, parameter, repeats, slow_s, quick=False) -> list[dict]:
+    """Every method on one scene: checked, then timed round-robin; one row per method.
+
+    ``kind`` is ``"rough die"`` (``parameter``: its segment count) or a
+    cutting scene (``parameter``: the tool tip's x); ``size`` the slave count.
+    """
+    scene = build(kind, size, parameter)
+    x = np.asarray(scene.x)
+    start, end = _run.endpoints(scene.surface)
+    reference = oracle.reference_contact(x, start, end, scene.radius)
+    label = f"{kind}" + (f", M={parameter:,}" if kind == "rough die" else "")
+    position = "" if kind == "rough die" else f"x_tip={parameter}"
+    rows, timed, single = [], {}, {}
+    for name, method in _methods(scene).items():
+        reason = _skip_reason(name, x, start, end, scene.radius, quick)
+        if reason:
+            rows.append(_run.row(label, len(x), len(start), name, position=position, note=reason))
+            continue
+        fn, args = method if isinstance(method, tuple) else method(x, start, end, scene.radius)
+        jitted = hasattr(fn, "lower")
+        call, compile_s = compiled_call(fn, args) if jitted else (fn, None)
+        began = time.perf_counter()
+        result = jax.block_until_ready(call(*args))  # the answer checked, and a warm-up
+        first_s = time.perf_counter() - began
+        mismatch = _run.check(result, x, start, end, reference)
+        entry = _run.row(label, len(x), len(start), name, None, mismatch, position=position)
+        entry["dtype"] = str(x.dtype)
+        entry["note"] = oracle.describe(mismatch)
+        if first_s > slow_s:
+            single[name] = Timing(None, first_s, first_s, first_s, 1)
+            entry["note"] += f"; first call {first_s:.1f} s > {slow_s:g} s: timed once"
+        else:
+            timed[name] = (call, args)
+        entry["compile_s"] = "" if compile_s is None else round(compile_s, 3)
+        rows.append(entry)
+    timings = {**time_interleaved(timed, repeats=repeats, warmup=0), **single}
+    library_ms = timings["bucket_sort"].median_s * 1e3
+    for entry in rows:
+        timing = timings.get(entry["method"])
+        if timing is None:
+            continue
+        entry.update({**_run.timing_fields(timing), "compile_s": entry["compile_s"]})
+        entry["ratio"] = f"{timing.median_s * 1e3 / library_ms:.2f}"
+    return rows
+
+
+def ratios(rows) -> str:
+    """Markdown pivot: each method's median over ``bucket_sort``'s, one column per scene."""
+    scenes = list(dict.fromkeys((r["scene"], r["nodes"]) for r in rows))
+    header = [f"{scene.replace(' (x_tip=', ' (')}, N={nodes:,}" for scene, nodes in scenes]
+    lines = ["| method | " + " | ".join(header) + " |", "|---|" + "---:|" * len(scenes)]
+    for method in dict.fromkeys(r["method"] for r in rows):
+        cells = []
+        for scene, nodes in scenes:
+            found = [
+                r for r in rows if (r["scene"], r["nodes"], r["method"]) == (scene, nodes, method)
+            ]
+            ratio = found[0]["ratio"] if found else ""
+            cells.append(f"{ratio}x" if ratio else "—")
+        lines.append(f"| {method} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def plot(rows, out) -> list[str]:
+    """Run time against nodes for every method, one panel per scene kind, log axes."""
+    plt = _run.pyplot(out)
+    if plt is None:
+        return []
+    kinds = list(dict.fromkeys(r["scene"].split(", M=")[0] for r in rows))
+    figure, panels = plt.subplots(1, len(kinds), figsize=(5 * len(kinds), 4.5), squeeze=False)
+    for axes, kind in zip(panels[0], kinds, strict=True):
+        mine = [r for r in rows if r["scene"].startswith(kind) and r["median_ms"] != ""]
+        for name in dict.fromkeys(r["method"] for r in mine):
+            points = [(r["nodes"], r["median_ms"]) for r in mine if r["method"] == name]
+            style = "-" if name in ("all_to_all", "bucket_sort") else "--"
+            axes.plot(*zip(*points, strict=True), style, marker="o", ms=3, label=name)
+        axes.set(xscale="log", yscale="log", xlabel="slave nodes N", ylabel="median (ms)")
+        axes.set_title(kind, fontsize=9)
+        axes.legend(fontsize=6)
+    figure.tight_layout()
+    path = os.path.join(out, "peers.png")
+    figure.savefig(path, dpi=120)
+    plt.close(figure)
+    return [path]
+
+
+def run(quick: bool, out: str, repeats: int | None = None, slow_s: float | None = None) -> str:
+    """Runs every scene, writes CSV/markdown/PNG into ``out``; returns the markdown."""
+    slow_s = slow_s or (3.0 if quick else 30.0)
+    rows = []
+    for kind, size, parameter in _run.progress(QUICK_SCENES if quick else FULL_SCENES, "peers"):
+        count = repeats or (5 if quick else (20 if size <= 10**5 else 5))
+        rows += run_scene(kind, size, parameter, count, slow_s, quick)
+    pictures = plot(rows, out)
+    columns = ("scene", "position", "nodes", "segments", "method", "compile_s", "median_ms")
+    more = ("p10_ms", "p90_ms", "runs", "ratio", "max_gap_error", "note")
+    body = [
+        "Ratios (— : not run on that scene, the reason in the table below):",
+        "",
+        ratios(rows),
+        "",
+        _run.markdown(rows, (*columns, *more)),
+    ]
+    note = "float32 inputs; medians of interleaved runs; ratio = median / bucket_sort's median."
+    text = _run.section("peers", "Peers", quick, note, body, pictures)
+    _run.write(out, "peers", rows, text)
+    return text
+
+
+def main(argv=None) -> int:
+    return _run.main(run, __doc__.splitlines()[0], argv, slow=True)

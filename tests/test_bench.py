@@ -1,0 +1,186 @@
+"""The benchmark package at tiny sizes: its oracle, its checker, its rows and files.
+
+The timings themselves are not tested (a loaded machine makes any bound
+flaky); what is tested is that every answer is checked, and that a wrong
+answer is reported as wrong.
+"""
+
+import csv
+import functools
+import pathlib
+
+import numpy as np
+import pytest
+
+from jaxcontact._cli import _parser
+from jaxcontact._timing import time_interleaved
+from jaxcontact.bench import _run, baselines, oracle, peers
+from jaxcontact.scenes import cutting_scene, paper_scene, rough_die_scene
+from tests.oracle import oracle_contact
+
+
+def _scene_arrays(scene):
+    start, end = _run.endpoints(scene.surface)
+    return np.asarray(scene.x), start, end
+
+
+@pytest.mark.parametrize("build", [lambda: paper_scene(9), lambda: cutting_scene(300, 18.0)])
+def test_reference_equals_exact_oracle(build):
+    """The float64 reference agrees with the exact-fraction oracle, ties included."""
+    scene = build()
+    x, start, end = _scene_arrays(scene)
+    reference = oracle.reference_contact(x, start, end, scene.radius, chunk=16)
+    exact = oracle_contact(x, scene.surface.nodes, scene.surface.segments, radius=scene.radius)
+    np.testing.assert_array_equal(reference.segment, exact.segment)
+    np.testing.assert_allclose(reference.gap[exact.found], exact.gap[exact.found], atol=1e-12)
+
+
+def test_reference_gives_a_shared_vertex_to_the_face_the_slave_is_outside_of():
+    # Segments 0: (1, 1) -> (0, 0) and 1: (0, 0) -> (1, -1); a convex corner at the origin.
+    start, end = np.array([[1.0, 1.0], [0.0, 0.0]]), np.array([[0.0, 0.0], [1.0, -1.0]])
+    # Equally far from both faces: outside segment 1 only (its normal (-1, -1)/sqrt 2).
+    x = np.array([[-0.1, -0.2]])
+    distance, gap = oracle.evaluate(x, start, end, [1])
+    assert gap[0] > 0
+    assert oracle.reference_contact(x, start, end, 1.0).segment.tolist() == [1]
+
+
+def test_compare_reports_every_kind_of_wrong_answer():
+    scene = cutting_scene(2_000, 18.0)
+    x, start, end = _scene_arrays(scene)
+    reference = oracle.reference_contact(x, start, end, scene.radius)
+    assert reference.found.sum() > 5
+    right = baselines.numpy_dense(x, start, end, scene.radius)
+    assert oracle.compare(*right, x, start, end, reference).wrong_segment == 0
+
+    segment, gap, found = (part.copy() for part in right)
+    rows = np.flatnonzero(found)
+    segment[rows[0]] = (segment[rows[0]] + 5) % len(start)  # a farther segment
+    found[rows[1]] = False  # a missed contact
+    gap[rows[2]] += 0.01  # a gap error
+    far = np.argmax(np.abs(x - start[0]).sum(axis=1))
+    segment[far], found[far] = 0, True  # a false contact
+    wrong = oracle.compare(segment, gap, found, x, start, end, reference)
+    assert (wrong.missed, wrong.false, wrong.wrong_segment) == (1, 1, 1)
+    assert wrong.max_gap_error >= 0.01
+    assert wrong.wrong_by > 0
+    assert "1 missed" in oracle.describe(wrong) and "1 wrong segment" in oracle.describe(wrong)
+
+
+# jax-md is left to the benchmark's own check: importing it takes 15 s (flax, pymatgen).
+@pytest.mark.parametrize("name", [name for name in baselines.PEERS if name != "jax-md cell list"])
+def test_every_peer_agrees_with_the_reference_up_to_ties(name):
+    if baselines.unavailable(name):
+        pytest.skip(baselines.unavailable(name))
+    for scene in (cutting_scene(500, 18.0), rough_die_scene(1_000, 100)):
+        x, start, end = _scene_arrays(scene)
+        reference = oracle.reference_contact(x, start, end, scene.radius)
+        fn, args = baselines.PEERS[name][1](x, start, end, scene.radius)
+        mismatch = _run.check(fn(*args), x, start, end, reference)
+        assert (mismatch.missed, mismatch.false, mismatch.wrong_segment) == (0, 0, 0), mismatch
+        assert mismatch.max_gap_error < 1e-5
+
+
+def test_a_missing_peer_is_reported_not_raised(monkeypatch):
+    monkeypatch.setitem(baselines.PEERS, "nowhere", ("no_such_module_xyz", None))
+    assert baselines.unavailable("nowhere").startswith("not installed")
+
+
+def test_peer_rows_and_csv(tmp_path, monkeypatch):
+    # Only the dense NumPy peer and the skip path, to stay fast.
+    monkeypatch.setattr(
+        baselines, "PEERS", {k: baselines.PEERS[k] for k in ("NumPy dense", "NumPy box-then-dense")}
+    )
+    monkeypatch.setattr(peers, "PAIR_BUDGET", 5_000)  # dense (19,840 pairs) skipped, box not
+    rows = peers.run_scene("cutting, tool in (x_tip=18)", 1_000, 18.0, repeats=2, slow_s=60)
+    by_method = {row["method"]: row for row in rows}
+    assert set(by_method) == {"all_to_all", "bucket_sort", "NumPy dense", "NumPy box-then-dense"}
+    assert by_method["NumPy dense"]["note"].startswith("skipped")
+    assert by_method["NumPy dense"]["median_ms"] == ""
+    for method in ("all_to_all", "bucket_sort", "NumPy box-then-dense"):
+        row = by_method[method]
+        assert row["median_ms"] > 0 and row["runs"] == 2
+        assert row["missed"] == row["false"] == row["wrong_segment"] == 0, row
+    assert by_method["bucket_sort"]["ratio"] == "1.00"
+    _run.write(str(tmp_path), "peers", rows, "text")
+    with open(tmp_path / "peers.csv") as stream:
+        written = list(csv.DictReader(stream))
+    assert len(written) == 4 and list(written[0]) == list(_run.COLUMNS)
+
+
+def test_time_interleaved_runs_each_call_round_robin():
+    order = []
+
+    def tagged(tag, x):
+        order.append(tag)
+        return x
+
+    x = np.zeros(3)
+    calls = {
+        "a": (functools.partial(tagged, "a"), (x,)),
+        "b": (functools.partial(tagged, "b"), (x,)),
+    }
+    timings = time_interleaved(calls, repeats=3, warmup=0)
+    assert list(timings) == ["a", "b"] and timings["b"].runs == 3
+    assert order == ["a", "b"] + ["a", "b"] * 3  # first calls, then three rounds
+
+
+def test_cli_registers_bench():
+    args = _parser().parse_args(["bench", "--quick", "--out", "somewhere"])
+    assert args.quick and args.out == "somewhere" and callable(args.run)
+
+
+def _results_module():
+    import importlib.util
+
+    path = pathlib.Path(__file__).resolve().parent.parent / "benchmarks" / "results.py"
+    spec = importlib.util.spec_from_file_location("benchmark_results", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_results_assembles_stored_sections(tmp_path):
+    results = _results_module()
+    stored = tmp_path / "results"
+    stored.mkdir()
+    (stored / "peers.md").write_text("## Peers\n\ntable\n\n![peers.png](peers.png)\n")
+    (stored / "bucket.md").write_text("```\n# bucket.py: a comment line\n```\n")
+    notes = tmp_path / "notes.md"
+    notes.write_text("Hand-written headline.")
+    output = tmp_path / "RESULTS.md"
+    results.assemble(str(stored), str(output), str(notes))
+    text = output.read_text()
+    assert text.startswith("# Benchmark results\n\n- Machine:")
+    assert "Hand-written headline." in text
+    assert "#### Peers" in text and "![peers.png](results/peers.png)" in text
+    assert "\n# bucket.py: a comment line\n" in text  # code blocks are left as they are
+    assert "Not run yet: `python benchmarks/results.py --sections dense`" in text
+    if not (pathlib.Path(results.HERE) / "stability.py").exists():
+        assert "`benchmarks/stability.py` is not in this checkout." in text
+
+
+def test_a_plan_too_small_is_counted_as_missed_contacts():
+    from jaxcontact import bucket_sort, plan_buckets
+    from jaxcontact.bench import time_vs_error
+
+    scene = cutting_scene(2_000, 18.0)
+    x, start, end = _scene_arrays(scene)
+    reference = oracle.reference_contact(x, start, end, scene.radius)
+    plan = plan_buckets(scene.x, scene.surface, radius=scene.radius)
+    small = time_vs_error._shrunk(plan, block_capacity=0.25)
+    assert small.block_capacity == max(1, int(plan.block_capacity * 0.25))
+    contact = bucket_sort(scene.x, scene.surface, radius=scene.radius, plan=small)
+    mismatch = _run.check(contact, x, start, end, reference)
+    assert bool(contact.overflow) and mismatch.missed > 0
+
+
+def test_paper_test1_rows():
+    from jaxcontact.bench import paper_tests
+
+    rows = paper_tests.run_test1((1,), repeats=1)
+    assert [row["method"] for row in rows] == list(paper_tests.METHODS)
+    assert all(row["nodes"] == 4 and row["median_ms"] > 0 for row in rows)
+    assert rows[0]["note"] == "same contacts"  # all_to_all against the float64 oracle
+    assert "0 rows differ" in rows[2]["note"]  # swept against the float64 brute force
+    assert "| all_to_all |" in paper_tests.averages(rows)
