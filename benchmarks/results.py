@@ -53,7 +53,7 @@ SECTIONS = {
     "time_vs_error": Section(
         "Time against error", "time_vs_error.py", ("--out", "{out}"), "{out}/time_vs_error.md"
     ),
-    "stability": Section("Stability", "stability.py", (), "benchmarks/RESULTS_stability.md"),
+    "stability": Section("Stability", "stability.py", ("--out", "{out}")),
     "simulate": Section("Simulation", "simulate.py"),
 }
 VERSIONED = ("jax", "jaxlib", "numpy", "scipy", "shapely", "matplotlib", "jax-md", "libigl")

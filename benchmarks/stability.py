@@ -247,6 +247,44 @@ def study_ties(rng, samples):
     return rows
 
 
+# Printed with the tables, so that RESULTS.md (benchmarks/results.py) says
+# what each one measured; what the figures mean is in benchmarks/results/notes.md.
+INTRO = """Every reference value comes from the exact rational oracle of the test
+suite (`tests/oracle.py`, `fractions.Fraction`) evaluated on the very inputs
+the library sees (already rounded to float32 or float64), so an error here is
+the library's arithmetic alone. The figures are not timings: seeded and
+exact, they are the same on any machine. "scale" is `|x - a| + |b - a|` for
+the chosen segment, the length the error is made of; the property tests
+assert `|gap - exact| <= 8 eps scale`."""
+STUDIES = {
+    "offset": (
+        "Gap error against the coordinates' offset",
+        "A unit segment at a random angle, 64 slaves within 0.5 of it, the scene shifted by "
+        "`offset` (`all_to_all`; `bucket_sort` evaluates the same kernel on the same pair). "
+        "`input_rounding` is half an ulp of the offset: what rounding the inputs costs.",
+    ),
+    "length": (
+        "Gap error against the segment length",
+        "Segments of length 1e-9 to 1, slaves about a unit away; `collapsed` counts the "
+        "segments that round to a point (and are then ignored, as zero-length segments are).",
+    ),
+    "angle": (
+        "Crossing time against the angle between path and segment",
+        "Paths of length 1 crossing a unit segment at an angle of 1e-8 to 1 rad, against the "
+        "conditioning `eps / sin(angle)` (dotted in the plot); a differing crossed/not-crossed "
+        "decision is explained when an orientation test lies within its rounding of zero "
+        "(`unexplained` counts the others).",
+    ),
+    "ties": (
+        "Segment choices near a tie",
+        "Slaves at a relative distance delta from an exact tie: the bisector of a corner (faces "
+        "meeting at 33 degrees) or the midline between two parallel faces, shifted by up to 2 "
+        "from the origin. `unexplained` counts choices that differ from the oracle's although "
+        "the two exact distances differ by more than the float bound (2 x 8 eps scale).",
+    ),
+}
+
+
 def _write_csv(rows, path):
     with open(path, "w", newline="") as handle:
         writer = csv.DictWriter(handle, fieldnames=list(rows[0]))
@@ -303,9 +341,12 @@ def main(argv=None):
         "angle": study_angle(rng, samples),
         "ties": study_ties(rng, samples),
     }
+    print(INTRO)
     for name, rows in studies.items():
         _write_csv(rows, out / f"stability_{name}.csv")
-        print(f"\n### {name}\n\n{_table(rows)}")
+        title, method = STUDIES[name]
+        picture = f"![{title}](stability_{name}.png)"
+        print(f"\n### {title}\n\n{method}\n\n{picture}\n\n{_table(rows)}")
     _plot(studies["offset"], "offset", [("max_gap_error", "o-")], out / "stability_offset.png",
           "Gap error against coordinate offset (unit segment)", "offset (0 drawn at 0.1)",
           "max |gap - exact|")  # fmt: skip
