@@ -68,6 +68,9 @@ def run_section(name: str, results: str, quick: bool, pinned: bool) -> str:
         return f"`benchmarks/{section.script}` is not in this checkout: section skipped."
     # A pinned run keeps its CSV and PNG files apart from the unpinned one's.
     out = os.path.join(results, "pinned") if pinned else results
+    # Relative to the repository root (the scripts run there), so the command
+    # RESULTS.md shows can be rerun from any clone.
+    out = os.path.relpath(out, ROOT)
     args = [arg.format(out=out) for arg in section.args] + (["--quick"] if quick else [])
     command = ["taskset", "-c", "0"] * pinned + [sys.executable, script, *args]
     shown = " ".join(["taskset -c 0"] * pinned + [f"python benchmarks/{section.script}", *args])
