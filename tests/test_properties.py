@@ -83,7 +83,8 @@ def _place(kind, a, b, c, s, h, tiny):
     normal = np.array([d[1], -d[0]]) / max(np.linalg.norm(d), 1e-300)
     if kind == "vertex":
         return b
-    if kind.startswith("bisector") and (not np.any(a - b) or not np.any(c - b)):
+    # blind_spot divides by these norms: a neighbour whose length underflows has no bisector.
+    if kind.startswith("bisector") and 0 in (np.linalg.norm(a - b), np.linalg.norm(c - b)):
         kind = "near"  # a zero-length neighbour has no bisector
     if kind == "on_segment":
         return a + s * d
@@ -142,6 +143,9 @@ def scenes(draw, dtype):
         direction = _unit(np.array(draw(st.sampled_from([(1.0, 0.0), (0.6, 0.8), (-0.28, 0.96)]))))
         nodes = np.concatenate([nodes[:1], nodes[:1] + 1e-9 * direction, nodes[1:]])
     nodes = nodes[:NUM_NODES]
+    # Flushed as the placed scene is below, before slaves are placed from it:
+    # a drawn 7e-167 made |b - a| underflow to 0 in blind_spot (a division by zero).
+    nodes[np.abs(nodes) < np.sqrt(np.finfo(dtype).tiny)] = 0
     count = len(nodes)
     segments = [[k, k + 1] for k in range(count - 1)]
     if count > 2 and draw(st.booleans()):
@@ -282,3 +286,11 @@ def test_plain_bucket_calls_plan_themselves_with_and_without_cells():
         crossing = jaxcontact.bucket_swept(jnp.asarray(few.x_prev), jnp.asarray(few.x), surface)
         check_crossing(crossing, few, np.float64)
         assert contact.found.any() and crossing.crossed.any()
+
+
+def test_slaves_are_placed_beside_a_segment_whose_length_underflows():
+    # Regression (found by CI): nodes (0, 0) and (0, 7e-167), whose distance
+    # squares to 0, made the bisector placement divide by zero.
+    a, b = np.zeros(2), np.array([0.0, 7.31496951e-167])
+    for kind in ("bisector_out", "bisector_in"):
+        assert np.all(np.isfinite(_place(kind, a, b, a, 0.5, 0.125, 1e-7)))
