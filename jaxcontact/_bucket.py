@@ -41,7 +41,6 @@ from jaxcontact._narrow import (
     kept_rows,
     list_candidates,
     scatter_blocks,
-    vmapped,
 )
 from jaxcontact._plan import BucketPlan, plan_buckets
 from jaxcontact._search import one_scene_at_a_time
@@ -129,7 +128,7 @@ def _binned_choice(
     segments = Segments(start, end, segment_ok, nodes, num_nodes)
 
     def search(_):
-        return choose(query, ok, segments, boxes, vmapped(kernel, *rows), plan, listed)
+        return choose(query, ok, segments, boxes, kernel, rows, plan, listed)
 
     no_choice = jnp.full(query.shape[:1], -1, jnp.int32), jnp.zeros((), bool)
     return in_stages(go, [search], [no_choice])

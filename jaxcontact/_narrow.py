@@ -23,6 +23,7 @@ from jaxcontact._cells import (
     cell_of,
     flat_cell,
     segment_in_slot,
+    stable_order,
 )
 from jaxcontact._inputs import Segments
 from jaxcontact._plan import BucketPlan
@@ -92,8 +93,12 @@ def list_candidates(query: Array, ok: Array, segments: Segments, boxes: Box, pla
     return cell_lists(cells, bins), bins.overflow
 
 
-def search_listed(pair_value, segments: Segments, listed: CellLists, capacity: int, dtype):
-    """i32[S]: each kept slave against the segments of its cell, ``capacity`` slots."""
+# Kept slaves are searched in chunks of this many rows, fullest lists first.
+_CHUNK = 2048
+
+
+def _search_rows(pair_value, segments: Segments, listed: CellLists, capacity: int, dtype):
+    """i32[S]: each row against the segments of its list, up to the fullest list's length."""
 
     def score(slot):
         segment = segment_in_slot(listed, slot)
@@ -106,7 +111,7 @@ def search_listed(pair_value, segments: Segments, listed: CellLists, capacity: i
     # Each cell lists its segments in increasing order. Per-slot gathers make
     # the unrolled loop slow to compile and to run: scan blocks of 8 (measured
     # 3x faster to compile and 1.3-1.7x faster to run on the cutting scene).
-    # Every row runs as many slots as the fullest cell among them needs, not
+    # Every row runs as many slots as the fullest list among them needs, not
     # the planned capacity (measured 1.3x faster on the rough die).
     fullest = jnp.max(listed.count, initial=0)
     return lowest_score(
@@ -114,18 +119,73 @@ def search_listed(pair_value, segments: Segments, listed: CellLists, capacity: i
     )
 
 
-def choose(query: Array, ok: Array, segments: Segments, boxes: Box, pair_value, plan, listed=None):
+def search_listed(kernel, rows, segments: Segments, listed: CellLists, capacity: int, dtype):
+    """i32[S]: each kept slave against the segments of its cell, ``capacity`` slots.
+
+    ``kernel(*row, a, b)`` scores a pair; ``rows`` are the kept slaves' f[S, ...]
+    arrays. A row costs as many slots as the fullest list it is searched
+    with. Kept blocks hold many slaves whose cells are empty (a block is kept
+    when its box meets the master's), so above ``_CHUNK`` rows they are
+    ordered by list length, longest first, and searched a chunk at a time,
+    each chunk only as far as its own longest list; the loop stops at the
+    first chunk of empty lists. Each row's answer does not depend on the
+    order: it meets its own list in the same order either way.
+    """
+    num_rows = listed.first.shape[0]
+    if num_rows <= _CHUNK:
+        return _search_rows(vmapped(kernel, *rows), segments, listed, capacity, dtype)
+    num_chunks = -(-num_rows // _CHUNK)
+    pad = num_chunks * _CHUNK - num_rows
+    count = jnp.clip(listed.count, 0, capacity)
+    # Longest first: a stable sort of (capacity - length), one int32 key.
+    order = stable_order(capacity - count, capacity + 1)
+
+    def arrange(values, fill):
+        values = values[order]
+        return jnp.pad(values, ((0, pad),) + ((0, 0),) * (values.ndim - 1), constant_values=fill)
+
+    first, count = arrange(listed.first, 0), arrange(listed.count, 0)
+    rows = tuple(arrange(values, 0) for values in rows)
+    longest = count[::_CHUNK]  # each chunk's longest list comes first
+
+    def search_chunk(state):
+        chunk, choice = state
+        at = chunk * _CHUNK
+
+        def part(values):
+            return jax.lax.dynamic_slice_in_dim(values, at, _CHUNK)
+
+        lists = CellLists(part(first), part(count), listed.order)
+        pair_value = vmapped(kernel, *map(part, rows))
+        found = _search_rows(pair_value, segments, lists, capacity, dtype)
+        return chunk + 1, jax.lax.dynamic_update_slice_in_dim(choice, found, at, 0)
+
+    def more(state):
+        chunk = jnp.minimum(state[0], num_chunks - 1)
+        return (state[0] < num_chunks) & (longest[chunk] > 0)
+
+    choice = jnp.full((num_chunks * _CHUNK,), -1, jnp.int32)
+    _, choice = jax.lax.while_loop(more, search_chunk, (jnp.zeros((), jnp.int32), choice))
+    return jnp.full((num_rows,), -1, jnp.int32).at[order].set(choice[:num_rows])
+
+
+def choose(
+    query: Array, ok: Array, segments: Segments, boxes: Box, kernel, rows, plan, listed=None
+):
     """i32[S] chosen segment of each kept slave, and whether the cells overflowed.
 
-    Rows that are not ``ok`` may hold any choice; the caller masks them.
-    ``listed`` reuses candidate lists found before (see ``find_candidates``).
+    Pairs are scored by ``kernel(*row, a, b)`` over ``rows``. Rows that are
+    not ``ok`` may hold any choice; the caller masks them. ``listed`` reuses
+    candidate lists found before (see ``find_candidates``).
     """
     if not plan.use_cells:
+        pair_value = vmapped(kernel, *rows)
         return search_all(pair_value, segments, query.shape[0], query.dtype), jnp.zeros((), bool)
     overflow = jnp.zeros((), bool)
     if listed is None:
         listed, overflow = list_candidates(query, ok, segments, boxes, plan)
-    return search_listed(pair_value, segments, listed, plan.cell_capacity, query.dtype), overflow
+    choice = search_listed(kernel, rows, segments, listed, plan.cell_capacity, query.dtype)
+    return choice, overflow
 
 
 def vmapped(kernel, *rows):

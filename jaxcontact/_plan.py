@@ -12,13 +12,16 @@ means a new compilation.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
+from typing import NamedTuple
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 
 from jaxcontact import _inputs
-from jaxcontact._broad import broad_phase, conservative_margin, enclosing, segment_boxes
+from jaxcontact._broad import Box, broad_phase, conservative_margin, enclosing, segment_boxes
 from jaxcontact._cells import Grid, bin_segments
 from jaxcontact._types import Array, Surface
 
@@ -63,6 +66,54 @@ class BucketPlan:
 
 def _grow(count: float, slack: float, least: int = 1) -> int:
     return max(least, int(math.ceil(count * slack)))
+
+
+class _Measured(NamedTuple):
+    """What ``plan_buckets`` reads off a configuration (one compiled program)."""
+
+    num_blocks: Array  # i32[]  blocks of slaves that meet the master's box
+    rows: Array  # i32[B * block_size]  their rows, N past the end
+    slave_ok: Array  # bool[N]
+    query: Array  # f[N, 2]  the point whose cell is looked up
+    reach: Array  # f[]  the segment boxes' inflation
+    boxes: Box  # f[M, 2]  inflated segment boxes
+    master: Box  # f[2]  around them
+    segment_ok: Array  # bool[M]
+    extents: Array  # f[M]  each segment's larger side
+
+
+@functools.partial(jax.jit, static_argnames=("block_size", "num_blocks"))
+def _measure(x_prev, x, surface, radius, mask, block_size: int, num_blocks: int) -> _Measured:
+    # Jitted: run op by op, this took 5-7 s at every new shape (measured).
+    segments = _inputs.resolve_segments(surface)
+    if x_prev is not None:
+        _, prev_ok = _inputs.sanitize_points(x_prev, mask)
+        x, slave_ok = _inputs.sanitize_points(x, prev_ok)
+        x_prev = jnp.where(slave_ok[:, None], x_prev, 0)
+        query_low, query_high, query = jnp.minimum(x_prev, x), jnp.maximum(x_prev, x), x_prev
+        travel = jnp.max(jnp.where(slave_ok, jnp.max(jnp.abs(x - x_prev), axis=-1), 0), initial=0)
+        cull_reach = jnp.zeros((), x.dtype)
+    else:
+        x, slave_ok = _inputs.sanitize_points(x, mask)
+        query_low = query_high = query = x
+        travel = cull_reach = radius
+    _, blocks = broad_phase(
+        query_low, query_high, slave_ok, segments, cull_reach, block_size, num_blocks
+    )
+    reach = conservative_margin(travel, segments.start, segments.end)
+    boxes = segment_boxes(segments, reach)
+    extents = jnp.max(jnp.abs(segments.end - segments.start), axis=-1)
+    return _Measured(
+        blocks.count, blocks.rows, slave_ok, query, reach, boxes, enclosing(boxes), segments.ok,
+        extents,
+    )  # fmt: skip
+
+
+@functools.partial(jax.jit, static_argnames=("shape", "span"))
+def _fullest_cell(boxes: Box, ok: Array, grid: Grid, shape, span) -> Array:
+    """i32[]: the most segments in one cell."""
+    bins = bin_segments(boxes, ok, grid, shape, span, ok.shape[0])
+    return jnp.max(bins.count, initial=0)
 
 
 def plan_buckets(
@@ -110,22 +161,15 @@ def plan_buckets(
         raise ValueError(f"cell_factor must be > 0; got {cell_factor}")
     if cell_size is not None and not (math.isfinite(cell_size) and cell_size > 0):
         raise ValueError(f"cell_size must be finite and > 0; got {cell_size}")
-    x = _inputs.check_points("x", x)
-    mask = _inputs.check_mask("mask", mask, x.shape[0])
+    if x_prev is not None:
+        x_prev, x, mask = _inputs.check_path_inputs(x_prev, x, mask)
+    else:
+        x = _inputs.check_points("x", x)
+        mask = _inputs.check_mask("mask", mask, x.shape[0])
+        radius = _inputs.check_radius(radius, x.dtype)
     surface = _inputs.check_surface(surface, x.dtype)
     num_rows, num_segments = x.shape[0], surface.segments.shape[0]
-    segments = _inputs.resolve_segments(surface)
     for_paths = x_prev is not None
-    if for_paths:
-        x_prev, x, slave_ok = _inputs.check_paths(x_prev, x, mask)
-        query_low, query_high, query = jnp.minimum(x_prev, x), jnp.maximum(x_prev, x), x_prev
-        travel = jnp.max(jnp.where(slave_ok, jnp.max(jnp.abs(x - x_prev), axis=-1), 0), initial=0)
-        cull_reach = jnp.zeros((), x.dtype)
-    else:
-        radius = _inputs.check_radius(radius, x.dtype)
-        x, slave_ok = _inputs.sanitize_points(x, mask)
-        query_low = query_high = query = x
-        travel = cull_reach = radius
     block_size = max(1, min(block_size, max(num_rows, 1)))
     num_blocks = -(-num_rows // block_size)
     if use_cells is None:
@@ -134,46 +178,34 @@ def plan_buckets(
     # that ``replan`` and ``plan_batch`` keep the choice when they grow them.
     if num_rows == 0 or num_segments == 0:
         return BucketPlan(num_rows, block_size, 1, for_paths, use_cells)
-    _, blocks = broad_phase(
-        query_low, query_high, slave_ok, segments, cull_reach, block_size, num_blocks
-    )
-    block_capacity = min(num_blocks, _grow(int(blocks.count), slack))
+    found = _measure(x_prev, x, surface, radius, mask, block_size, num_blocks)
+    block_capacity = min(num_blocks, _grow(int(found.num_blocks), slack))
     if not use_cells:
         return BucketPlan(num_rows, block_size, block_capacity, for_paths)
 
     # The cells: sized from what the narrow phase will see.
-    reach = conservative_margin(travel, segments.start, segments.end)
-    boxes = segment_boxes(segments, reach)
-    master = enclosing(boxes)
-    kept = np.asarray(blocks.rows)
+    kept = np.asarray(found.rows)
     kept = kept[kept < num_rows]
-    kept = kept[np.asarray(slave_ok)[kept]]
-    points = np.asarray(query)[kept]
-    ok = np.asarray(segments.ok)
+    kept = kept[np.asarray(found.slave_ok)[kept]]
+    points = np.asarray(found.query)[kept]
+    ok = np.asarray(found.segment_ok)
     if points.size == 0 or not ok.any():
         return BucketPlan(num_rows, block_size, block_capacity, for_paths, use_cells)
-    low = np.maximum(np.asarray(master.low), points.min(axis=0))
-    high = np.minimum(np.asarray(master.high), points.max(axis=0))
+    low = np.maximum(np.asarray(found.master.low), points.min(axis=0))
+    high = np.minimum(np.asarray(found.master.high), points.max(axis=0))
     extent = np.maximum(high - low, 0.0)
-    lengths = np.abs(np.asarray(segments.end) - np.asarray(segments.start))[ok].max(axis=-1)
+    lengths = np.asarray(found.extents)[ok]
     if cell_size is None:
-        cell_size = cell_factor * (2 * float(reach) + float(np.median(lengths)))
+        cell_size = cell_factor * (2 * float(found.reach) + float(np.median(lengths)))
         # Keep the grid O(slaves kept): no more cells than 4 per kept slave.
         most_cells = max(64, 4 * len(points))
         while np.prod(np.ceil(extent * slack / cell_size) + 1) > most_cells:
             cell_size *= 1.25
     grid_shape = tuple(int(v) for v in np.ceil(extent * slack / cell_size).astype(int) + 1)
-    widths = (np.asarray(boxes.high) - np.asarray(boxes.low))[ok]
+    widths = (np.asarray(found.boxes.high) - np.asarray(found.boxes.low))[ok]
     span = tuple(int(math.ceil(w * slack / cell_size)) + 1 for w in widths.max(axis=0))
-    bins = bin_segments(
-        boxes,
-        segments.ok,
-        Grid(jnp.asarray(low, x.dtype), jnp.asarray(cell_size, x.dtype)),
-        grid_shape,
-        span,
-        num_segments,
-    )
-    most_per_cell = int(np.max(np.asarray(bins.count)))
+    grid = Grid(jnp.asarray(low, x.dtype), jnp.asarray(cell_size, x.dtype))
+    most_per_cell = int(_fullest_cell(found.boxes, found.segment_ok, grid, grid_shape, span))
     return BucketPlan(
         num_slaves=num_rows,
         block_size=block_size,

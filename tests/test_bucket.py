@@ -7,12 +7,13 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import given
 from hypothesis import strategies as st
 
 from jaxcontact import (
     BucketPlan,
     Surface,
+    _narrow,
     all_to_all,
     bucket_sort,
     bucket_swept,
@@ -236,7 +237,6 @@ def polyline_scenes(draw, dtype):
     return jnp.asarray(padded_slaves, dtype), surface, mask
 
 
-@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(
     st.sampled_from([jnp.float32, jnp.float64]).flatmap(polyline_scenes),
     st.sampled_from([0.0, 0.05, 0.3, 1.0]),
@@ -251,7 +251,6 @@ def test_bucket_sort_equals_all_to_all_on_random_polylines(scene, radius, cell_s
     )
 
 
-@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(
     st.sampled_from([jnp.float32, jnp.float64]).flatmap(polyline_scenes),
     st.tuples(st.floats(-1, 1), st.floats(-1, 1)),
@@ -353,3 +352,38 @@ def test_plan_rejects_a_non_positive_cell_factor_and_replan_takes_keywords():
     plan = plan_buckets(scene.x, scene.surface, radius=0.02)
     bigger = replan(plan, scene.x, scene.surface, radius=0.02, slack=3.0, use_cells=True)
     assert bigger.cell_capacity >= plan.cell_capacity
+
+
+@pytest.mark.parametrize("detector", ["bucket_sort", "bucket_swept", "reused"])
+def test_kept_slaves_searched_in_chunks_longest_lists_first_equal_dense(monkeypatch, detector):
+    # Above _narrow._CHUNK kept slaves, the cell search sorts them by list
+    # length and stops at the first chunk of empty lists. A chunk of 64 rows
+    # puts the rough die's 2,496 kept slaves in 39 chunks: full, partly empty
+    # and empty ones, with masked slaves and NaN rows among them.
+    monkeypatch.setattr(_narrow, "_CHUNK", 64)
+    jax.clear_caches()  # programs traced with the default chunk must not be reused
+    try:
+        scene = rough_die_scene(4_000, 400, dtype=jnp.float64)
+        x = scene.x.at[7].set(jnp.nan)
+        mask = jnp.asarray(np.arange(x.shape[0]) % 11 != 5)
+        if detector == "bucket_swept":
+            x_prev = x + jnp.asarray([[0.01, 0.03]])
+            plan = plan_buckets(x, scene.surface, x_prev=x_prev, mask=mask)
+            assert plan.use_cells and plan.slave_capacity > 64
+            got = jit_bucket_swept(x_prev, x, scene.surface, mask=mask, plan=plan)
+            assert int(got.crossed.sum()) > 0
+            assert_same_crossing(got, swept(x_prev, x, scene.surface, mask=mask))
+            return
+        plan = plan_buckets(x, scene.surface, radius=scene.radius, mask=mask)
+        assert plan.use_cells and plan.slave_capacity > 64
+        near = None
+        if detector == "reused":
+            near = find_candidates(x, scene.surface, radius=scene.radius, skin=0.0, plan=plan)
+        got = jit_bucket_sort(
+            x, scene.surface, radius=scene.radius, mask=mask, plan=plan, candidates=near
+        )
+        want = all_to_all(x, scene.surface, radius=scene.radius, mask=mask)
+        assert int(want.found.sum()) > 0
+        assert_same_contact(got, want, scene.radius)
+    finally:
+        jax.clear_caches()
