@@ -136,16 +136,16 @@ def search_listed(kernel, rows, segments: Segments, listed: CellLists, capacity:
         return _search_rows(vmapped(kernel, *rows), segments, listed, capacity, dtype)
     num_chunks = -(-num_rows // _CHUNK)
     pad = num_chunks * _CHUNK - num_rows
-    count = jnp.clip(listed.count, 0, capacity)
     # Longest first: a stable sort of (capacity - length), one int32 key.
-    order = stable_order(capacity - count, capacity + 1)
+    length = jnp.clip(listed.count, 0, capacity)
+    order = stable_order(capacity - length, capacity + 1)
 
-    def arrange(values, fill):
-        values = values[order]
-        return jnp.pad(values, ((0, pad),) + ((0, 0),) * (values.ndim - 1), constant_values=fill)
+    def arrange(values):
+        """Rows in search order, padded with zeros (empty lists) to whole chunks."""
+        return jnp.pad(values[order], ((0, pad),) + ((0, 0),) * (values.ndim - 1))
 
-    first, count = arrange(listed.first, 0), arrange(listed.count, 0)
-    rows = tuple(arrange(values, 0) for values in rows)
+    first, count = arrange(listed.first), arrange(listed.count)
+    rows = tuple(map(arrange, rows))
     longest = count[::_CHUNK]  # each chunk's longest list comes first
 
     def search_chunk(state):

@@ -87,9 +87,7 @@ def _measure(x_prev, x, surface, radius, mask, block_size: int, num_blocks: int)
     # Jitted: run op by op, this took 5-7 s at every new shape (measured).
     segments = _inputs.resolve_segments(surface)
     if x_prev is not None:
-        _, prev_ok = _inputs.sanitize_points(x_prev, mask)
-        x, slave_ok = _inputs.sanitize_points(x, prev_ok)
-        x_prev = jnp.where(slave_ok[:, None], x_prev, 0)
+        x_prev, x, slave_ok = _inputs.sanitize_paths(x_prev, x, mask)
         query_low, query_high, query = jnp.minimum(x_prev, x), jnp.maximum(x_prev, x), x_prev
         travel = jnp.max(jnp.where(slave_ok, jnp.max(jnp.abs(x - x_prev), axis=-1), 0), initial=0)
         cull_reach = jnp.zeros((), x.dtype)
