@@ -32,7 +32,7 @@ from jaxcontact import (
     plan_buckets,
     swept,
 )
-from jaxcontact._timing import pinned_note, time_call
+from jaxcontact.bench.timing import pinned_note, time_call
 from jaxcontact.bench.baselines import (
     kdtree_pairs_project,
     kdtree_project,

@@ -43,7 +43,7 @@ def worker(devices: int, num_nodes: int, repeats: int, batches: list[int]) -> No
         plan_sharded,
         sharded,
     )
-    from jaxcontact._timing import time_call
+    from jaxcontact.bench.timing import time_call
     from jaxcontact.scenes import cutting_scene
 
     assert len(jax.devices()) == devices, jax.devices()

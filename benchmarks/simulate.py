@@ -3,8 +3,8 @@
     python benchmarks/simulate.py            # 10,000 and 63,001 nodes, travel 0.5 mm
     python benchmarks/simulate.py --quick    # 2,000 nodes, a smoke test
 
-Each row runs ``jaxcontact.simulate`` as ``jaxcontact demo`` does
-(``jaxcontact._demo_sim.run_demo``): the set-up and plan on the host, one run
+Each row runs ``jaxcontact.sim`` as ``jaxcontact demo`` does
+(``jaxcontact.sim.demo.run_demo``): the set-up and plan on the host, one run
 to compile (replanning if the plan overflowed), then the whole ``lax.scan``
 timed ``--repeats`` times (median, 10th–90th percentile), float32, jit.
 
@@ -23,8 +23,8 @@ import argparse
 import jax
 import numpy as np
 
-from jaxcontact._demo_sim import run_demo
-from jaxcontact._timing import pinned_note
+from jaxcontact.sim.demo import run_demo
+from jaxcontact.bench.timing import pinned_note
 
 
 def main() -> None:

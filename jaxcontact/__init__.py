@@ -1,19 +1,14 @@
 """jaxcontact: 2D node-to-segment contact detection as differentiable JAX array programs."""
 
-from jaxcontact._bucket import Candidates as Candidates
 from jaxcontact._bucket import bucket_sort as bucket_sort
 from jaxcontact._bucket import bucket_swept as bucket_swept
-from jaxcontact._bucket import candidates_expired as candidates_expired
-from jaxcontact._bucket import find_candidates as find_candidates
 from jaxcontact._dense import all_to_all as all_to_all
 from jaxcontact._dense import swept as swept
-from jaxcontact._plan import BucketPlan as BucketPlan
-from jaxcontact._plan import plan_buckets as plan_buckets
-from jaxcontact._plan import replan as replan
+from jaxcontact._search import Search as Search
+from jaxcontact._search import SearchState as SearchState
 from jaxcontact._shard import contact_forces as contact_forces
-from jaxcontact._shard import plan_batch as plan_batch
-from jaxcontact._shard import plan_sharded as plan_sharded
 from jaxcontact._shard import sharded as sharded
+from jaxcontact._sizes import Sizes as Sizes
 from jaxcontact._types import Contact as Contact
 from jaxcontact._types import Crossing as Crossing
 from jaxcontact._types import Surface as Surface

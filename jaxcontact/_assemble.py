@@ -12,7 +12,7 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
-from jaxcontact._cells import stable_order
+from jaxcontact._sort import stable_order
 from jaxcontact._geometry import cross_sign, dot, path_hit, project, unit_normal
 from jaxcontact._inputs import Segments
 from jaxcontact._types import Array, Contact, Crossing
@@ -40,11 +40,11 @@ def vertex_neighbours(segments: Segments) -> tuple[Array, Array]:
 
     O(M log M), by sorting the node indices: no M x M table.
     """
-    index = jnp.arange(segments.nodes.shape[0], dtype=jnp.int32)
+    index = jnp.arange(segments.indices.shape[0], dtype=jnp.int32)
     ok = segments.ok
     # Segments that are not real (padding, masked, degenerate) match nothing,
     # so padding can never change a real row: keys -1, wanted -2.
-    starts, ends = segments.nodes[:, 0], segments.nodes[:, 1]
+    starts, ends = segments.indices[:, 0], segments.indices[:, 1]
     num_values = segments.num_nodes + 1
     before = _first_match(jnp.where(ok, ends, -1), jnp.where(ok, starts, -2), index, num_values)
     after = _first_match(jnp.where(ok, starts, -1), jnp.where(ok, ends, -2), index, num_values)
@@ -110,44 +110,6 @@ def prefer_outside(x: Array, segments: Segments, choice: Array) -> tuple[Array, 
     inside = jnp.where(convex, larger < 0, smaller < 0)
     sign = jnp.where(tied, jnp.where(inside, -1, 1), 0).astype(x.dtype)
     return jnp.where(tied & better, other, choice), sign
-
-
-def in_stages(go: Array, stages, skipped, value=None):
-    """Runs ``stages`` in turn, each on the last one's result, when ``go``.
-
-    Each stage is its own ``lax.cond`` on ``go``, returning ``skipped[i]``
-    when not. Besides skipping the work (no real row; no kept block), the
-    cond boundaries keep XLA from fusing a search loop into the gathers that
-    read its result: on the CPU it then re-ran the search per gathered value
-    (measured 5x slower on the cutting scene), and ``optimization_barrier``
-    does not stop that fusion there. Under ``vmap`` the conds become selects:
-    both branches run and the boundaries are lost, which is why the searches
-    run through ``_search.one_scene_at_a_time``. ``value`` goes to the first
-    stage.
-    """
-    for stage, empty in zip(stages, skipped, strict=True):
-        value = jax.lax.cond(go, stage, lambda _, empty=empty: empty, value)
-    return value
-
-
-def empty_contact(x: Array, overflow: Array) -> Contact:
-    zeros = jnp.zeros(x.shape[:1], x.dtype)
-    false = jnp.zeros(x.shape[:1], bool)
-    minus_one = jnp.full(x.shape[:1], -1, jnp.int32)
-    return Contact(
-        zeros, zeros, minus_one, jnp.zeros_like(x), jnp.zeros_like(x), false, false, overflow
-    )
-
-
-def empty_crossing(x: Array, overflow: Array) -> Crossing:
-    zeros = jnp.zeros(x.shape[:1], x.dtype)
-    return Crossing(
-        zeros,
-        jnp.full(x.shape[:1], -1, jnp.int32),
-        jnp.zeros_like(x),
-        jnp.zeros(x.shape[:1], bool),
-        overflow,
-    )
 
 
 def contact_from_choice(

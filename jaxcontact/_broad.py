@@ -118,3 +118,10 @@ def broad_phase(low, high, slave_ok, segments: Segments, reach, block_size: int,
     block = block_boxes(low, high, slave_ok, block_size)
     blocks = cull_blocks(block, enclosing(boxes), low.shape[0], block_size, capacity)
     return boxes, blocks
+
+
+def kept_rows(x: Array, slave_ok: Array, blocks: Blocks):
+    """The kept slaves (f[S, 2], bad rows zeroed) and bool[S] which are real."""
+    rows = jnp.minimum(blocks.rows, x.shape[0] - 1)
+    ok = slave_ok[rows] & (blocks.rows < x.shape[0])
+    return jnp.where(ok[:, None], x[rows], 0), ok

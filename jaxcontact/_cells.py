@@ -15,13 +15,18 @@ a cell hold at most ``capacity`` segments; beyond either, ``overflow`` is set.
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import jax
 import jax.numpy as jnp
 
-from jaxcontact._broad import Box
+from jaxcontact._broad import Box, enclosing
+from jaxcontact._sort import stable_order
 from jaxcontact._types import Array
+
+if TYPE_CHECKING:
+    from jaxcontact._inputs import Segments
+    from jaxcontact._sizes import Sizes
 
 
 class Grid(NamedTuple):
@@ -38,21 +43,6 @@ class Bins(NamedTuple):
     start: Array  # i32[G + 1]  first entry of each cell (G = cells; the last is "no cell")
     count: Array  # i32[G + 1]  entries of each cell
     overflow: Array  # bool[]  a segment spans too many cells, or a cell holds too many
-
-
-def stable_order(keys: Array, num_values: int) -> Array:
-    """i32[E]: the stable ``argsort`` of ``keys``, integers in ``[0, num_values)``.
-
-    Where ``key * E + position`` fits in int32 it is one sort of those
-    unique numbers, with no payload: measured 5.6x faster on the CPU than
-    ``argsort(stable=True)`` (2.9 against 16 ms for 90,000 entries), whose
-    sort carries the positions as a second operand.
-    """
-    size = keys.shape[0]
-    if num_values * size >= 2**31:
-        return jnp.argsort(keys, stable=True).astype(jnp.int32)
-    position = jnp.arange(size, dtype=jnp.int32)
-    return jax.lax.sort(keys.astype(jnp.int32) * size + position) % size
 
 
 def cell_of(points: Array, grid: Grid, shape: tuple[int, int]) -> Array:
@@ -131,3 +121,28 @@ def segment_in_slot(lists: CellLists, slot) -> Array:
         return jnp.full(lists.first.shape, -1, jnp.int32)
     entry = jnp.minimum(lists.first + slot, lists.order.shape[0] - 1)
     return jnp.where(slot < lists.count, lists.order[entry], -1)
+
+
+def list_candidates(query: Array, ok: Array, segments: Segments, boxes: Box, sizes: Sizes):
+    """The segments in each kept slave's cell (``CellLists``), and the cells' overflow.
+
+    Args:
+      query: f[S, 2] the point whose cell decides the candidates.
+      ok: bool[S] kept slave is real.
+      segments: resolved segments.
+      boxes: f[M, 2] segment boxes inflated by the search distance.
+      sizes: the static sizes.
+    """
+    shape = sizes.grid_shape
+    master = enclosing(boxes)
+    low = jnp.maximum(master.low, jnp.min(jnp.where(ok[:, None], query, jnp.inf), axis=0))
+    high = jnp.minimum(master.high, jnp.max(jnp.where(ok[:, None], query, -jnp.inf), axis=0))
+    extent = jnp.where(jnp.isfinite(high - low) & (high > low), high - low, 0)
+    origin = jnp.where(jnp.isfinite(low), low, 0)
+    # The grid always covers the region: cells grow when the region does.
+    cell_size = jnp.maximum(sizes.cell_size, jnp.max(extent / jnp.asarray(shape, query.dtype)))
+    grid = Grid(origin, cell_size.astype(query.dtype))
+    bins = bin_segments(boxes, segments.ok, grid, shape, sizes.span, sizes.cell_capacity)
+    no_cell = shape[0] * shape[1]
+    cells = jnp.where(ok, flat_cell(cell_of(query, grid, shape), shape), no_cell)
+    return cell_lists(cells, bins), bins.overflow

@@ -1,6 +1,6 @@
 """The ``jaxcontact`` command line.
 
-``jaxcontact demo`` runs the ploughing simulation (``jaxcontact._demo_sim``);
+``jaxcontact demo`` runs the ploughing simulation (``jaxcontact.sim.demo``);
 ``jaxcontact demo --scene paper`` runs the source paper's scene (SCENES.md,
 Test 1) through both dense detectors, prints what they found and how long
 they took, and draws the scene near the tool tip. Each subcommand is one ``_<name>`` function
@@ -17,8 +17,9 @@ import sys
 import jax
 import numpy as np
 
-from jaxcontact import _demo_sim, all_to_all, swept
-from jaxcontact._timing import pinned_note, time_call
+from jaxcontact import all_to_all, swept
+from jaxcontact.sim import demo as _demo_sim
+from jaxcontact.bench.timing import pinned_note, time_call
 from jaxcontact.bench import add_arguments as add_bench_arguments
 from jaxcontact.bench import run_all as run_bench
 from jaxcontact.scenes import paper_scene

@@ -13,15 +13,11 @@ import jax
 import jax.numpy as jnp
 
 from jaxcontact import _inputs
-from jaxcontact._assemble import (
-    contact_from_choice,
-    crossing_from_choice,
-    in_stages,
-)
+from jaxcontact._assemble import contact_from_choice, crossing_from_choice
 from jaxcontact._geometry import first_hit_time, squared_distance
 from jaxcontact._inputs import Segments
-from jaxcontact._narrow import search_all, vmapped
-from jaxcontact._search import one_scene_at_a_time
+from jaxcontact._lowest import one_scene_at_a_time
+from jaxcontact._narrow import in_stages, search_all, vmapped
 from jaxcontact._types import Array, Contact, Crossing, Surface
 
 
@@ -55,30 +51,29 @@ def all_to_all(x: Array, surface: Surface, *, radius, mask: Array | None = None)
     return _all_to_all(x, surface, radius, mask)
 
 
-def _search_all(kernel, rows, segments, slave_ok, assemble):
+def _search_all(kernel, rows, segments: Segments, slave_ok, assemble):
     """``assemble(choice)`` for the segment of lowest ``kernel(*row, a, b)``
     per row, over every segment.
 
-    The search runs in a ``lax.cond`` (``_assemble.in_stages``), scene by
-    scene under ``vmap`` (``_search.one_scene_at_a_time``). Masked rows are
+    The search runs in a ``lax.cond`` (``_narrow.in_stages``), scene by
+    scene under ``vmap`` (``_lowest.one_scene_at_a_time``). Masked rows are
     dropped when assembling, not inside the search's loop (a row mask fused
     into it made it 3-4x slower, measured).
     """
-    fixed = jax.lax.stop_gradient((rows, segments.start, segments.end))
+    fixed = jax.lax.stop_gradient((rows, segments))
     search = one_scene_at_a_time(functools.partial(_lowest, kernel))
-    choice = search(*fixed, segments.ok, slave_ok)
+    choice = search(*fixed, slave_ok)
     # The search's cond already separates it from the gathers; a cond here
     # would only skip assembling rows that are all masked (and under vmap run
     # both branches).
     return assemble(choice)
 
 
-def _lowest(kernel, rows, start, end, segment_ok, slave_ok):
+def _lowest(kernel, rows, segments: Segments, slave_ok):
     """i32[N]: per row, the segment of lowest ``kernel``; -1 if no row is real."""
-    segments = Segments(start, end, segment_ok, None, 0)
 
     def search(_):
-        return search_all(vmapped(kernel, *rows), segments, slave_ok.shape[0], start.dtype)
+        return search_all(vmapped(kernel, *rows), segments, slave_ok.shape[0], segments.start.dtype)
 
     return in_stages(jnp.any(slave_ok), [search], [jnp.full(slave_ok.shape, -1, jnp.int32)])
 

@@ -11,7 +11,8 @@ nothing NaN reaches a value or a gradient.
 
 from __future__ import annotations
 
-from typing import NamedTuple
+import dataclasses
+import functools
 
 import jax
 import jax.numpy as jnp
@@ -106,13 +107,23 @@ def check_radius(radius, dtype) -> Array:
     return jnp.asarray(radius, dtype)
 
 
-class Segments(NamedTuple):
-    """Master segments resolved to end points, with bad ones neutralised."""
+@functools.partial(
+    jax.tree_util.register_dataclass,
+    data_fields=["start", "end", "ok", "indices"],
+    meta_fields=["num_nodes"],
+)
+@dataclasses.dataclass(frozen=True)
+class Segments:
+    """Master segments resolved to end points, with bad ones neutralised.
+
+    A pytree whose node count is static, so it passes whole through ``cond``,
+    ``custom_vmap`` and ``jit``.
+    """
 
     start: Array  # f[M, 2]  a; zeros where not ok
     end: Array  # f[M, 2]  b; zeros where not ok
     ok: Array  # bool[M]  real, finite and of non-zero length
-    nodes: Array  # i32[M, 2]  the node indices of each segment's ends
+    indices: Array | None  # i32[M, 2]  the node indices of each segment's ends
     num_nodes: int  # P, static: ok segments' node indices lie in [0, P)
 
 

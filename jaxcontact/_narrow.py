@@ -1,57 +1,34 @@
-"""The bucket sort's stages after culling: search the kept slaves, write the rows back.
+"""The narrow phase: each row against its candidate segments, lowest score wins.
 
-Shared by ``bucket_sort``, ``bucket_swept`` and reusable candidates. Every
-function works on the S kept slaves (S = block capacity x block size), never
-on all N, except ``scatter_blocks``, which writes them into N rows.
+Shared by every detector: ``search_all`` (each row against every segment:
+``all_to_all``, ``swept``, and the bucket sort's kept slaves when there are
+few segments) and ``search_listed`` (each kept slave against its cell's
+segments). Both return segment indices only; ``_assemble`` turns them into
+results.
 """
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import jax
 import jax.numpy as jnp
 
-from jaxcontact._broad import (
-    Blocks,
-    Box,
-    enclosing,
-)
-from jaxcontact._cells import (
-    CellLists,
-    Grid,
-    bin_segments,
-    cell_lists,
-    cell_of,
-    flat_cell,
-    segment_in_slot,
-    stable_order,
-)
+from jaxcontact._broad import Box
+from jaxcontact._cells import CellLists, list_candidates, segment_in_slot
 from jaxcontact._inputs import Segments
-from jaxcontact._plan import BucketPlan
-from jaxcontact._search import lowest_score
+from jaxcontact._lowest import lowest_score
+from jaxcontact._sizes import Sizes
+from jaxcontact._sort import stable_order
 from jaxcontact._types import Array
 
 
-def scatter_blocks(result, blocks: Blocks, empty, block_size: int):
-    """Writes the kept blocks' results into the all-zero result ``empty``.
+class Queries(NamedTuple):
+    """The rows a search scores, as the pair kernel takes them."""
 
-    Whole blocks are written (a scatter of C slices of ``block_size`` rows):
-    measured 8x cheaper than a scatter of single rows, which XLA also fused
-    with the projection and recomputed per field.
-    """
-    num_rows = empty.segment.shape[0]
-    num_blocks = -(-num_rows // block_size)
-    pad = num_blocks * block_size - num_rows
-
-    def put(full, part):
-        if full.ndim == 0:
-            return part
-        tail = full.shape[1:]
-        padded = jnp.pad(full, ((0, pad),) + ((0, 0),) * len(tail))
-        by_block = padded.reshape((num_blocks, block_size) + tail)
-        by_block = by_block.at[blocks.index].set(part.reshape((-1, block_size) + tail), mode="drop")
-        return by_block.reshape((num_blocks * block_size,) + tail)[:num_rows]
-
-    return jax.tree.map(put, empty, result)
+    rows: tuple  # f[S, 2] each: the kernel's per-row arguments (a point; a path's two ends)
+    query: Array  # f[S, 2]  the point whose cell is looked up
+    ok: Array  # bool[S]  the row is real
 
 
 def search_all(pair_value, segments: Segments, num_rows: int, dtype) -> Array:
@@ -66,35 +43,6 @@ def search_all(pair_value, segments: Segments, num_rows: int, dtype) -> Array:
     # Rows are not masked here but where the result is assembled: any per-row
     # mask fused into this loop made it 3-4x slower (measured).
     return lowest_score(score, segments.ok.shape[0], num_rows, dtype)
-
-
-def list_candidates(query: Array, ok: Array, segments: Segments, boxes: Box, plan: BucketPlan):
-    """The segments in each kept slave's cell (``CellLists``), and the cells' overflow.
-
-    Args:
-      query: f[S, 2] the point whose cell decides the candidates.
-      ok: bool[S] kept slave is real.
-      segments: resolved segments.
-      boxes: f[M, 2] segment boxes inflated by the search distance.
-      plan: the static sizes.
-    """
-    shape = plan.grid_shape
-    master = enclosing(boxes)
-    low = jnp.maximum(master.low, jnp.min(jnp.where(ok[:, None], query, jnp.inf), axis=0))
-    high = jnp.minimum(master.high, jnp.max(jnp.where(ok[:, None], query, -jnp.inf), axis=0))
-    extent = jnp.where(jnp.isfinite(high - low) & (high > low), high - low, 0)
-    origin = jnp.where(jnp.isfinite(low), low, 0)
-    # The grid always covers the region: cells grow when the region does.
-    cell_size = jnp.maximum(plan.cell_size, jnp.max(extent / jnp.asarray(shape, query.dtype)))
-    grid = Grid(origin, cell_size.astype(query.dtype))
-    bins = bin_segments(boxes, segments.ok, grid, shape, plan.span, plan.cell_capacity)
-    no_cell = shape[0] * shape[1]
-    cells = jnp.where(ok, flat_cell(cell_of(query, grid, shape), shape), no_cell)
-    return cell_lists(cells, bins), bins.overflow
-
-
-# Kept slaves are searched in chunks of this many rows, fullest lists first.
-_CHUNK = 2048
 
 
 def _search_rows(pair_value, segments: Segments, listed: CellLists, capacity: int, dtype):
@@ -119,23 +67,25 @@ def _search_rows(pair_value, segments: Segments, listed: CellLists, capacity: in
     )
 
 
-def search_listed(kernel, rows, segments: Segments, listed: CellLists, capacity: int, dtype):
-    """i32[S]: each kept slave against the segments of its cell, ``capacity`` slots.
+def search_listed(kernel, rows, segments: Segments, listed: CellLists, sizes: Sizes):
+    """i32[S]: each kept slave against the segments of its cell, at most
+    ``sizes.cell_capacity`` slots.
 
     ``kernel(*row, a, b)`` scores a pair; ``rows`` are the kept slaves' f[S, ...]
     arrays. A row costs as many slots as the fullest list it is searched
     with. Kept blocks hold many slaves whose cells are empty (a block is kept
-    when its box meets the master's), so above ``_CHUNK`` rows they are
+    when its box meets the master's), so above ``sizes.chunk_rows`` rows they are
     ordered by list length, longest first, and searched a chunk at a time,
     each chunk only as far as its own longest list; the loop stops at the
     first chunk of empty lists. Each row's answer does not depend on the
     order: it meets its own list in the same order either way.
     """
-    num_rows = listed.first.shape[0]
-    if num_rows <= _CHUNK:
+    num_rows, chunk_rows = listed.first.shape[0], sizes.chunk_rows
+    capacity, dtype = sizes.cell_capacity, segments.start.dtype
+    if num_rows <= chunk_rows:
         return _search_rows(vmapped(kernel, *rows), segments, listed, capacity, dtype)
-    num_chunks = -(-num_rows // _CHUNK)
-    pad = num_chunks * _CHUNK - num_rows
+    num_chunks = -(-num_rows // chunk_rows)
+    pad = num_chunks * chunk_rows - num_rows
     # Longest first: a stable sort of (capacity - length), one int32 key.
     length = jnp.clip(listed.count, 0, capacity)
     order = stable_order(capacity - length, capacity + 1)
@@ -146,46 +96,44 @@ def search_listed(kernel, rows, segments: Segments, listed: CellLists, capacity:
 
     first, count = arrange(listed.first), arrange(listed.count)
     rows = tuple(map(arrange, rows))
-    longest = count[::_CHUNK]  # each chunk's longest list comes first
+    longest = count[::chunk_rows]  # each chunk's longest list comes first
 
     def search_chunk(state):
         chunk, choice = state
-        at = chunk * _CHUNK
+        at = chunk * chunk_rows
 
         def part(values):
-            return jax.lax.dynamic_slice_in_dim(values, at, _CHUNK)
+            return jax.lax.dynamic_slice_in_dim(values, at, chunk_rows)
 
         lists = CellLists(part(first), part(count), listed.order)
         pair_value = vmapped(kernel, *map(part, rows))
-        found = _search_rows(pair_value, segments, lists, capacity, dtype)
-        return chunk + 1, jax.lax.dynamic_update_slice_in_dim(choice, found, at, 0)
+        chosen = _search_rows(pair_value, segments, lists, capacity, dtype)
+        return chunk + 1, jax.lax.dynamic_update_slice_in_dim(choice, chosen, at, 0)
 
     def more(state):
         chunk = jnp.minimum(state[0], num_chunks - 1)
         return (state[0] < num_chunks) & (longest[chunk] > 0)
 
-    choice = jnp.full((num_chunks * _CHUNK,), -1, jnp.int32)
+    choice = jnp.full((num_chunks * chunk_rows,), -1, jnp.int32)
     _, choice = jax.lax.while_loop(more, search_chunk, (jnp.zeros((), jnp.int32), choice))
     return jnp.full((num_rows,), -1, jnp.int32).at[order].set(choice[:num_rows])
 
 
-def choose(
-    query: Array, ok: Array, segments: Segments, boxes: Box, kernel, rows, plan, listed=None
-):
+def choose(queries: Queries, segments: Segments, boxes: Box, kernel, sizes: Sizes, listed=None):
     """i32[S] chosen segment of each kept slave, and whether the cells overflowed.
 
-    Pairs are scored by ``kernel(*row, a, b)`` over ``rows``. Rows that are
-    not ``ok`` may hold any choice; the caller masks them. ``listed`` reuses
-    candidate lists found before (see ``find_candidates``).
+    Pairs are scored by ``kernel(*row, a, b)`` over ``queries.rows``. Rows
+    that are not ``ok`` may hold any choice; the caller masks them.
+    ``listed`` reuses candidate lists found before (``Search``).
     """
-    if not plan.use_cells:
-        pair_value = vmapped(kernel, *rows)
-        return search_all(pair_value, segments, query.shape[0], query.dtype), jnp.zeros((), bool)
+    num_rows, dtype = queries.query.shape[0], queries.query.dtype
+    if not sizes.use_cells:
+        pair_value = vmapped(kernel, *queries.rows)
+        return search_all(pair_value, segments, num_rows, dtype), jnp.zeros((), bool)
     overflow = jnp.zeros((), bool)
     if listed is None:
-        listed, overflow = list_candidates(query, ok, segments, boxes, plan)
-    choice = search_listed(kernel, rows, segments, listed, plan.cell_capacity, query.dtype)
-    return choice, overflow
+        listed, overflow = list_candidates(queries.query, queries.ok, segments, boxes, sizes)
+    return search_listed(kernel, queries.rows, segments, listed, sizes), overflow
 
 
 def vmapped(kernel, *rows):
@@ -201,8 +149,19 @@ def vmapped(kernel, *rows):
     return pair_value
 
 
-def kept_rows(x: Array, slave_ok: Array, blocks: Blocks):
-    """The kept slaves (f[S, 2], bad rows zeroed) and bool[S] which are real."""
-    rows = jnp.minimum(blocks.rows, x.shape[0] - 1)
-    ok = slave_ok[rows] & (blocks.rows < x.shape[0])
-    return jnp.where(ok[:, None], x[rows], 0), ok
+def in_stages(go: Array, stages, skipped, value=None):
+    """Runs ``stages`` in turn, each on the last one's result, when ``go``.
+
+    Each stage is its own ``lax.cond`` on ``go``, returning ``skipped[i]``
+    when not. Besides skipping the work (no real row; no kept block), the
+    cond boundaries keep XLA from fusing a search loop into the gathers that
+    read its result: on the CPU it then re-ran the search per gathered value
+    (measured 5x slower on the cutting scene), and ``optimization_barrier``
+    does not stop that fusion there. Under ``vmap`` the conds become selects:
+    both branches run and the boundaries are lost, which is why the searches
+    run through ``_lowest.one_scene_at_a_time``. ``value`` goes to the first
+    stage.
+    """
+    for stage, empty in zip(stages, skipped, strict=True):
+        value = jax.lax.cond(go, stage, lambda _, empty=empty: empty, value)
+    return value

@@ -1,126 +1,336 @@
-"""The reduction every detector shares: the lowest score, ties to the lowest index."""
+"""The search object: sizes allocated once on the host, one jitted search per step.
+
+jax-md's neighbour lists split the work in two: ``allocate`` looks at
+concrete data on the host and fixes the buffer sizes; ``update`` runs under
+``jit`` with those sizes and says when they were outgrown. ``Search`` does the
+same for contact, and adds what a contact search needs: candidates found
+within ``radius + skin`` are reused while the slaves and the master together
+have moved less than the skin, and found again inside the step (a ``cond``)
+when they have not; the overflow flag is carried in the state, so one check
+after a ``lax.scan`` covers every step.
+"""
 
 from __future__ import annotations
 
+import dataclasses
+import functools
+import math
+
 import jax
 import jax.numpy as jnp
+import numpy as np
 
-from jaxcontact._types import Array
+from jaxcontact import _bucket, _dense, _inputs
+from jaxcontact._sizes import CELLS_ABOVE, CHUNK_ROWS, Sizes, largest, measure, measure_batch
+from jaxcontact._types import Array, Contact, Crossing, Surface
 
-# Up to _UNROLL steps are unrolled into one fused pass over the rows (fastest:
-# the running minimum stays in registers). More steps run in a ``lax.scan``
-# over unrolled blocks of _BLOCK, which keeps compile time flat (measured: 400
-# segments compile in 1.3 s instead of 4-11 s, and run 20% slower).
-_UNROLL = 32
-_BLOCK = 8
+METHODS = ("auto", "binned", "dense", "exhaustive")
 
 
-def lowest_score(
-    score, num_steps: int, num_rows: int, dtype, *, unroll: int = _UNROLL, steps_needed=None
-) -> Array:
-    """i32[N]: per row, the segment with the smallest score.
+@functools.partial(
+    jax.tree_util.register_dataclass,
+    data_fields=["candidates", "overflow", "rebuilds"],
+    meta_fields=["sizes", "path_sizes"],
+)
+@dataclasses.dataclass(frozen=True)
+class SearchState:
+    """What a ``Search`` carries from step to step: a pytree with static sizes.
 
-    Exact ties go to the segment met first; every caller meets each row's
-    segments in increasing index order, so that is the lower index. (Carrying
-    a second key for ties through this loop made it 3.5x slower, measured;
-    see ``_assemble.prefer_outside`` for how vertex ties are settled.)
+    The sizes are static fields (part of the pytree's structure): a state
+    with other sizes compiles the search anew, once per distinct sizes, as a
+    new shape would. Everything else is traced.
 
-    A running minimum over ``num_steps`` calls of ``score``: O(N) memory and
-    one fused pass over the rows per step. Against an (N, M) plane reduced by
-    ``argmin`` it is 3.7x faster with the 20-segment cutting tool and slower
-    with the paper's 2 segments (benchmarks/dense.py). Steps run in unrolled
-    blocks inside a ``lax.scan``, so compile time stays flat as steps grow.
-
-    Args:
-      score: ``score(step) -> (value f[N], segment i32[N])``
-        for a traced step index; ``value = inf`` marks no candidate.
-      num_steps: how many steps to visit.
-      num_rows: N.
-      dtype: the values' dtype.
-      unroll: at most this many steps run unrolled in one pass; more run in
-        a ``lax.scan`` over blocks of ``_BLOCK``.
-      steps_needed: optional traced count <= ``num_steps`` past which every
-        row's score is ``inf`` (the caller guarantees it). Whole blocks past
-        it are then skipped (a ``lax.while_loop`` instead of the scan); steps
-        inside the last needed block still run, and with a single block it
-        changes nothing.
-
-    Returns:
-      The winning segment per row, ``-1`` where every value is ``inf``.
+    Attributes:
+      sizes: the closest-point search's capacities (``None`` for the
+        exhaustive method or a search without a radius).
+      path_sizes: the swept search's capacities (``None`` unless allocated
+        with ``x_prev``).
+      candidates: what lies within ``radius + skin``, found at ``allocate``
+        or since, with the positions it was found at.
+      overflow: bool[] some search since ``allocate`` outgrew the sizes: a
+        contact or crossing may have been missed. It stays True.
+      rebuilds: i32[] how often the candidates were found again since
+        ``allocate``.
     """
-    choice = jnp.full((num_rows,), -1, jnp.int32)
-    if num_steps == 0 or num_rows == 0:
-        return choice
-    best = jnp.full((num_rows,), jnp.inf, dtype)
-    block = num_steps if num_steps <= unroll else _BLOCK
-    num_blocks = -(-num_steps // block)
 
-    def visit_block(carry, first):
-        best, choice = carry
-        for offset in range(block):
-            step = first + offset
-            value, segment = score(jnp.minimum(step, num_steps - 1))
-            value = jnp.where(step < num_steps, value, jnp.inf)
-            better = value < best
-            best = jnp.where(better, value, best)
-            choice = jnp.where(better, segment, choice)
-        return (best, choice), None
+    sizes: Sizes | None
+    path_sizes: Sizes | None
+    candidates: _bucket.Candidates | None
+    overflow: Array
+    rebuilds: Array
 
-    firsts = jnp.arange(num_blocks, dtype=jnp.int32) * block
-    carry = (best, choice)
-    if num_blocks == 1:
-        carry, _ = visit_block(carry, firsts[0])
-    elif steps_needed is None:
-        carry, _ = jax.lax.scan(visit_block, carry, firsts)
-    else:
-        blocks_needed = jnp.minimum((steps_needed + block - 1) // block, num_blocks)
 
-        def step(state):
-            index, carry = state
-            return index + 1, visit_block(carry, index * block)[0]
+@dataclasses.dataclass(frozen=True)
+class Search:
+    """A contact search for the steps of a simulation. Frozen and hashable:
+    pass it to ``jit`` as a static argument, or close over it.
 
-        _, carry = jax.lax.while_loop(
-            lambda state: state[0] < blocks_needed, step, (jnp.zeros((), jnp.int32), carry)
+    Example:
+      >>> import jax
+      >>> import jaxcontact
+      >>> from jaxcontact.scenes import cutting_scene
+      >>> scene = cutting_scene(2_000, 18.0, x_tip_prev=18.2)
+      >>> search = jaxcontact.Search(radius=0.1, skin=0.05)
+      >>> state = search.allocate(scene.x, scene.surface, x_prev=scene.x_prev)
+      >>> step = jax.jit(search.closest)
+      >>> contact, state = step(state, scene.x, scene.surface)
+      >>> bool(contact.overflow), int(contact.found.sum())
+      (False, 13)
+      >>> moved = scene.x.at[:, 0].add(0.03)  # less than the skin: candidates reused
+      >>> contact, state = step(state, moved, scene.surface)
+      >>> bool(state.overflow), int(state.rebuilds)
+      (False, 0)
+      >>> dense = jaxcontact.all_to_all(moved, scene.surface, radius=0.1)
+      >>> bool((contact.segment == dense.segment).all())
+      True
+      >>> crossing, state = search.swept(state, scene.x_prev, scene.x, scene.surface)
+      >>> int(crossing.crossed.sum()) == int(jaxcontact.swept(scene.x_prev, scene.x, scene.surface).crossed.sum())
+      True
+
+    Attributes:
+      radius: the closest-point search radius (``closest``); ``None`` for a
+        search of paths only.
+      skin: candidates are found within ``radius + skin`` and reused until
+        the largest slave move plus the largest master node move since
+        exceeds it (or a row or segment becomes real, or a segment is joined
+        to other nodes). A larger skin finds more candidates less often.
+      method: ``"binned"``: bucket sort with the segments binned in cells,
+        each kept slave against its cell's segments; ``"dense"``: bucket
+        sort with each kept slave against every segment; ``"auto"``:
+        binned above ``cells_above`` segments, dense at or below;
+        ``"exhaustive"``: every slave against every segment (``all_to_all``,
+        ``swept``), with no sizes and no overflow.
+      slack: every measured capacity is multiplied by this at ``allocate``;
+        larger sizes last longer as the scene changes, and cost memory and
+        time per step.
+      block_size: slaves culled together (consecutive rows).
+      cells_above: the segment count above which ``"auto"`` bins in cells.
+      chunk_rows: kept slaves searched together, fullest cells first.
+    """
+
+    radius: float | None = None
+    skin: float = 0.0
+    method: str = "auto"
+    slack: float = 1.5
+    block_size: int = 64
+    cells_above: int = CELLS_ABOVE
+    chunk_rows: int = CHUNK_ROWS
+
+    def __post_init__(self):
+        if self.radius is not None and not (math.isfinite(self.radius) and self.radius >= 0):
+            raise ValueError(f"radius must be finite and >= 0, or None; got {self.radius}")
+        if not (math.isfinite(self.skin) and self.skin >= 0):
+            raise ValueError(f"skin must be finite and >= 0; got {self.skin}")
+        if self.method not in METHODS:
+            raise ValueError(f"method must be one of {METHODS}; got {self.method!r}")
+        if not self.slack >= 1:
+            raise ValueError(f"slack must be >= 1; got {self.slack}")
+        for name in ("block_size", "chunk_rows"):
+            if not (isinstance(getattr(self, name), int) and getattr(self, name) >= 1):
+                raise ValueError(f"{name} must be an int >= 1; got {getattr(self, name)!r}")
+
+    # -- host ---------------------------------------------------------------
+
+    def allocate(
+        self,
+        x: Array,
+        surface: Surface,
+        *,
+        x_prev: Array | None = None,
+        mask: Array | None = None,
+        at_least: SearchState | Sizes | None = None,
+    ) -> SearchState:
+        """Measures the sizes from concrete data on the host and finds the candidates.
+
+        Args:
+          x: f[N, 2] slave coordinates, or f[B, N, 2] for a batch of B scenes
+            searched under ``vmap`` with one allocation (then ``surface``,
+            ``x_prev`` and ``mask`` are batched likewise, or the surface
+            shared).
+          surface: the master ``Surface``.
+          x_prev: f[N, 2] previous positions: size the swept search too.
+          mask: optional bool[N], False for padding slaves.
+          at_least: a state (or ``Sizes``) that the new sizes must not be
+            smaller than: to grow after an overflow without shrinking, or to
+            size ahead of need for several configurations (allocate for
+            each, passing the last state).
+
+        Returns:
+          A ``SearchState``. Its sizes are static: each distinct sizes
+          compiles ``closest`` (``swept``) once.
+        """
+        if self.radius is None and x_prev is None:
+            raise ValueError("allocate needs x_prev= for a Search without a radius (paths only)")
+        _bucket._concrete_only("Search.allocate", (x, surface, x_prev, mask))
+        batched = np.ndim(x) == 3
+        if batched:
+            return self._allocate_batch(x, surface, x_prev, mask, at_least)
+        if x_prev is not None:
+            x_prev, x, mask = _inputs.check_path_inputs(x_prev, x, mask)
+        else:
+            x = _inputs.check_points("x", x)
+            mask = _inputs.check_mask("mask", mask, x.shape[0])
+        surface = _inputs.check_surface(surface, x.dtype)
+        sizes = path_sizes = candidates = None
+        overflow = jnp.zeros((), bool)
+        if self.method != "exhaustive":
+            if self.radius is not None:
+                sizes = self._merged(measure(x, surface, radius=self._reach, mask=mask,
+                                             **self._sizing), at_least, "sizes")  # fmt: skip
+                reach = jnp.asarray(self._reach, x.dtype)
+                candidates = _bucket.find_jit(x, surface, reach, mask, sizes=sizes)
+                overflow = candidates.overflow
+            if x_prev is not None:
+                path_sizes = self._merged(measure(x, surface, x_prev=x_prev, mask=mask,
+                                                  **self._sizing), at_least, "path_sizes")  # fmt: skip
+        return SearchState(sizes, path_sizes, candidates, overflow, jnp.zeros((), jnp.int32))
+
+    def _allocate_batch(self, x, surface, x_prev, mask, at_least) -> SearchState:
+        x = jnp.asarray(x)
+        if x.shape[-1] != 2:
+            raise ValueError(f"x must have shape (N, 2) or (B, N, 2); got shape {x.shape}")
+        axes = (0, 0 if np.ndim(surface.nodes) == 3 else None, None if mask is None else 0)
+        sizes = path_sizes = candidates = None
+        overflow = jnp.zeros(x.shape[:1], bool)
+        if self.method != "exhaustive":
+            if self.radius is not None:
+                sizes = measure_batch(x, surface, radius=self._reach, mask=mask, **self._sizing)
+                sizes = self._merged(sizes, at_least, "sizes")
+                reach = jnp.asarray(self._reach, x.dtype)
+
+                def find(x, surface, mask):
+                    return _bucket.find_jit(x, surface, reach, mask, sizes=sizes)
+
+                candidates = jax.vmap(find, in_axes=axes)(x, surface, mask)
+                overflow = candidates.overflow
+            if x_prev is not None:
+                path_sizes = measure_batch(x, surface, x_prev=x_prev, mask=mask, **self._sizing)
+                path_sizes = self._merged(path_sizes, at_least, "path_sizes")
+        return SearchState(
+            sizes, path_sizes, candidates, overflow, jnp.zeros(x.shape[:1], jnp.int32)
         )
-    return carry[1]
+
+    def init(
+        self,
+        x: Array,
+        surface: Surface,
+        *,
+        sizes: Sizes | None,
+        path_sizes: Sizes | None = None,
+        mask: Array | None = None,
+    ) -> SearchState:
+        """A fresh state with known sizes (from an earlier ``allocate``), under ``jit`` too.
+
+        For a run that starts inside a compiled program: its sizes are static
+        (``state.sizes``, hashable), the candidates are found here.
+        """
+        x = _inputs.check_points("x", x)
+        mask = _inputs.check_mask("mask", mask, x.shape[0])
+        surface = _inputs.check_surface(surface, x.dtype)
+        candidates, overflow = None, jnp.zeros((), bool)
+        if sizes is not None:
+            _bucket.check_sizes(sizes, x.shape[0], for_paths=False)
+            reach = jnp.asarray(self._reach, x.dtype)
+            candidates = _bucket.find_jit(x, surface, reach, mask, sizes=sizes)
+            overflow = candidates.overflow
+        return SearchState(sizes, path_sizes, candidates, overflow, jnp.zeros((), jnp.int32))
+
+    @property
+    def _reach(self) -> float:
+        return self.radius + self.skin
+
+    @property
+    def _sizing(self) -> dict:
+        use_cells = {"auto": None, "binned": True, "dense": False}[self.method]
+        return dict(slack=self.slack, block_size=self.block_size, use_cells=use_cells,
+                    cells_above=self.cells_above, chunk_rows=self.chunk_rows)  # fmt: skip
+
+    @staticmethod
+    def _merged(sizes: Sizes, at_least, field: str) -> Sizes:
+        if isinstance(at_least, Sizes):
+            old = at_least if at_least.for_paths == sizes.for_paths else None
+        else:
+            old = None if at_least is None else getattr(at_least, field)
+        return sizes if old is None else largest(sizes, old)
+
+    # -- traced -------------------------------------------------------------
+
+    def closest(
+        self, state: SearchState, x: Array, surface: Surface, *, mask: Array | None = None
+    ) -> tuple[Contact, SearchState]:
+        """The closest master segment of every slave within ``radius``: one step.
+
+        Runs under ``jit``, ``lax.scan``, ``vmap`` and ``grad`` (gradients of
+        the gaps and points with respect to ``x`` and ``surface.nodes``, as
+        ``all_to_all``'s).
+
+        Args:
+          state: from ``allocate`` or the last step.
+          x: f[N, 2] slave coordinates, N as allocated.
+          surface: the master ``Surface``, of the allocated shapes.
+          mask: optional bool[N], False for padding slaves.
+
+        Returns:
+          ``(contact, state)``. ``contact`` equals ``all_to_all(x, surface,
+          radius=search.radius, mask=mask)`` whenever ``contact.overflow`` is
+          False; when it is True, a contact may be missing: allocate again.
+        """
+        if self.radius is None:
+            raise ValueError("closest needs a Search with a radius; this one searches paths only")
+        x, surface, radius, mask = _inputs.check_contact_inputs(x, surface, self.radius, mask)
+        if self.method == "exhaustive":
+            return _dense._all_to_all(x, surface, radius, mask), state
+        if state.sizes is None:
+            raise ValueError("state has no closest-point sizes: make it with this search's allocate")
+        _bucket.check_sizes(state.sizes, x.shape[0], for_paths=False)
+        return _closest(self, state, x, surface, mask)
+
+    def swept(
+        self,
+        state: SearchState,
+        x_prev: Array,
+        x: Array,
+        surface: Surface,
+        *,
+        mask: Array | None = None,
+    ) -> tuple[Crossing, SearchState]:
+        """The first crossing of every slave's path ``x_prev -> x`` with the master.
+
+        Returns:
+          ``(crossing, state)``; ``crossing`` equals ``swept(x_prev, x,
+          surface, mask=mask)`` whenever ``crossing.overflow`` is False.
+        """
+        x_prev, x, mask = _inputs.check_path_inputs(x_prev, x, mask)
+        surface = _inputs.check_surface(surface, x.dtype)
+        if self.method == "exhaustive":
+            return _dense._swept(x_prev, x, surface, mask), state
+        if state.path_sizes is None:
+            raise ValueError("state has no path sizes: allocate it with x_prev=")
+        _bucket.check_sizes(state.path_sizes, x.shape[0], for_paths=True)
+        crossing = _bucket.crossing_jit(x_prev, x, surface, mask, sizes=state.path_sizes)
+        return crossing, dataclasses.replace(state, overflow=state.overflow | crossing.overflow)
 
 
-def one_scene_at_a_time(fn):
-    """``fn`` that, under ``vmap``, runs scene by scene (``lax.map``) instead of batched.
+@functools.partial(jax.jit, static_argnums=0)
+def _closest(search: Search, state: SearchState, x, surface, mask):
+    sizes = state.sizes
+    reach = jnp.asarray(search._reach, x.dtype)
+    radius = jnp.asarray(search.radius, x.dtype)
+    stale = _bucket.expired(state.candidates, x, surface, mask, search.skin)
 
-    For the searches only: they return segment indices, take their inputs
-    through ``stop_gradient`` (``jax.custom_batching.custom_vmap`` supports
-    no reverse-mode differentiation) and hold ``lax.cond`` s, which ``vmap``
-    would turn into selects that run both branches and lose the fusion
-    boundary ``_assemble.in_stages`` relies on. Mapped, each scene keeps
-    them; the batched rest (assembling, writing rows) stays vectorised. On
-    the CPU that measured as fast per scene as one unbatched call, where
-    plain batching was up to 6x slower (benchmarks/scaling.py). On other
-    backends the search is batched as usual.
-    Arguments must be arrays (or pytrees of arrays); close over static values.
-    """
-    mapped = jax.custom_batching.custom_vmap(fn)
+    def find_again(x, surface, mask, _):
+        return _bucket.find(x, surface, reach, mask, sizes)
 
-    @mapped.def_vmap
-    def rule(axis_size, in_batched, *args):
-        del axis_size
-        if jax.default_backend() != "cpu":
-            # Accelerators run the batch as one vectorised program (untested
-            # here: measure with benchmarks/scaling.py where one is at hand).
-            axes = jax.tree.map(lambda flag: 0 if flag else None, in_batched)
-            result = jax.vmap(fn, in_axes=tuple(axes))(*args)
-            return result, jax.tree.map(lambda _: True, result)
-        leaves, tree = jax.tree.flatten(args)
-        flags = jax.tree.leaves(in_batched)
-        batched = [leaf for leaf, flag in zip(leaves, flags, strict=True) if flag]
+    def keep(x, surface, mask, candidates):
+        return candidates
 
-        def one(slices):
-            slices = iter(slices)
-            pairs = zip(leaves, flags, strict=True)
-            full = [next(slices) if flag else leaf for leaf, flag in pairs]
-            return mapped(*jax.tree.unflatten(tree, full))
-
-        result = jax.lax.map(one, batched)
-        return result, jax.tree.map(lambda _: True, result)
-
-    return mapped
+    candidates = jax.lax.cond(stale, find_again, keep, x, surface, mask, state.candidates)
+    contact = _bucket.contact_jit(x, surface, radius, mask, sizes=sizes, candidates=candidates)
+    state = SearchState(
+        sizes,
+        state.path_sizes,
+        candidates,
+        state.overflow | contact.overflow,
+        state.rebuilds + stale.astype(jnp.int32),
+    )
+    return contact, state

@@ -1,9 +1,7 @@
-"""Scale-out on JAX's own machinery: batches of scenes and slaves split over devices.
+"""Scale-out on JAX's own machinery: slaves split over devices.
 
-Batches need nothing new: every detector maps over a leading axis with
-``jax.vmap``. The bucket detectors take one static plan for the whole batch,
-which ``plan_batch`` makes by planning each scene and keeping the largest
-sizes, then checking every scene against the result.
+(Batches need nothing new: every detector, and ``Search``, maps over a
+leading axis with ``jax.vmap``.)
 
 Devices: ``sharded`` runs a detector under ``jax.shard_map`` with the slave
 rows split over one mesh axis and the master replicated. Each device searches
@@ -15,99 +13,16 @@ many (``jax.distributed.initialize`` first; see the README).
 
 from __future__ import annotations
 
-import dataclasses
-
 import jax
 import jax.numpy as jnp
 import numpy as np
 from jax.sharding import Mesh, NamedSharding
 from jax.sharding import PartitionSpec as P
 
-from jaxcontact import _inputs
-from jaxcontact._bucket import _contact_jit, _crossing_jit
-from jaxcontact._plan import BucketPlan, plan_buckets
+from jaxcontact import _bucket, _inputs
+from jaxcontact._bucket import bucket_sort, bucket_swept
+from jaxcontact._sizes import Sizes, measure_batch
 from jaxcontact._types import Array, Contact, Surface
-
-
-def _scene(values, index):
-    return None if values is None else values[index]
-
-
-def plan_batch(
-    x: Array,
-    surface: Surface,
-    *,
-    radius=None,
-    x_prev: Array | None = None,
-    mask: Array | None = None,
-    **kwargs,
-) -> BucketPlan:
-    """One bucket plan that holds every scene of a batch.
-
-    Args:
-      x: f[B, N, 2] concrete slave coordinates of B scenes.
-      surface: the master, shared (nodes f[P, 2]) or one per scene (f[B, P, 2],
-        segments i32[B, M, 2], mask bool[B, M]).
-      radius: scalar search radius (for ``bucket_sort``).
-      x_prev: f[B, N, 2] previous positions (for ``bucket_swept``).
-      mask: optional bool[B, N].
-      **kwargs: further arguments of ``plan_buckets`` (``slack``, ``block_size``, ...).
-
-    Returns:
-      A ``BucketPlan`` with which no scene of the batch overflows (checked by
-      running each), for ``jax.vmap(lambda x, s: bucket_sort(x, s, radius=r, plan=plan))``.
-    """
-    x = np.asarray(x)
-    if x.ndim != 3 or x.shape[-1] != 2:
-        raise ValueError(f"x must have shape (B, N, 2); got {x.shape}")
-    shared = np.ndim(surface.nodes) == 2
-    scenes = []
-    for index in range(x.shape[0]):
-        own = surface if shared else jax.tree.map(lambda leaf, i=index: leaf[i], surface)
-        scenes.append((x[index], own, _scene(x_prev, index), _scene(mask, index)))
-
-    def plan_for(scene, **sizes):
-        points, own, before, rows = scene
-        where = {"radius": radius} if x_prev is None else {"x_prev": before}
-        return plan_buckets(points, own, mask=rows, **where, **kwargs, **sizes)
-
-    # Each scene's own plan, then every scene measured again at one cell edge
-    # (the largest chosen), so that the largest of each size holds for all.
-    alone = [plan_for(scene) for scene in scenes]
-    edge = max(plan.cell_size for plan in alone)
-    plans = [plan_for(scene, cell_size=edge) for scene in scenes] if edge > 0 else alone
-    plan = plans[0]
-    for other in plans[1:]:
-        plan = _largest(plan, other)
-    stuck = [index for index, scene in enumerate(scenes) if _overflows(plan, scene, radius)]
-    if stuck:
-        raise RuntimeError(f"plan_batch: scenes {stuck} overflow the merged plan {plan}")
-    return plan
-
-
-def _largest(first: BucketPlan, second: BucketPlan) -> BucketPlan:
-    """Each size the larger of two plans' (measured at the same cell edge)."""
-    return dataclasses.replace(
-        first,
-        block_capacity=max(first.block_capacity, second.block_capacity),
-        use_cells=first.use_cells or second.use_cells,
-        grid_shape=tuple(map(max, first.grid_shape, second.grid_shape)),
-        cell_size=max(first.cell_size, second.cell_size),
-        span=tuple(map(max, first.span, second.span)),
-        cell_capacity=max(first.cell_capacity, second.cell_capacity),
-    )
-
-
-def _overflows(plan: BucketPlan, scene, radius) -> bool:
-    points, surface, before, rows = scene
-    points = jnp.asarray(points)
-    rows = None if rows is None else jnp.asarray(rows)
-    if plan.for_paths:
-        result = _crossing_jit(jnp.asarray(before), points, surface, rows, plan=plan)
-    else:
-        radius = _inputs.check_radius(radius, points.dtype)
-        result = _contact_jit(points, surface, radius, rows, plan=plan)
-    return bool(result.overflow)
 
 
 def shard_rows(num_rows: int, num_shards: int) -> int:
@@ -120,25 +35,17 @@ def _pad_rows(values: Array, rows: int, fill=0) -> Array:
     return jnp.pad(values, ((0, pad),) + ((0, 0),) * (values.ndim - 1), constant_values=fill)
 
 
-def plan_sharded(
-    x: Array, surface: Surface, num_shards: int, *, x_prev: Array | None = None, mask=None, **kwargs
-) -> BucketPlan:
-    """A bucket plan for ``sharded(bucket_sort or bucket_swept, ...)``: one
-    device's rows of ``x`` padded as ``sharded`` pads them, planned as a batch.
+def _device_sizes(detector, points, surface: Surface, rows, num_shards: int, radius) -> Sizes:
+    """Sizes for one device's rows of a bucket detector: the padded rows
+    split ``num_shards`` ways and measured as a batch."""
+    per_device = points[0].shape[0] // num_shards
 
-    Arguments as for ``plan_buckets``, plus the device count ``num_shards``.
-    """
-    x = jnp.asarray(x)
-    per_shard = shard_rows(x.shape[0], num_shards)
-    total = per_shard * num_shards
-    rows = jnp.ones(x.shape[0], bool) if mask is None else jnp.asarray(mask)
+    def split(values):
+        return np.asarray(values).reshape((num_shards, per_device) + values.shape[1:])
 
-    def split(values, fill=0):
-        values = _pad_rows(values, total, fill)
-        return values.reshape((num_shards, per_shard) + values.shape[1:])
-
-    before = None if x_prev is None else split(jnp.asarray(x_prev))
-    return plan_batch(split(x), surface, x_prev=before, mask=split(rows, False), **kwargs)
+    if detector is bucket_swept:
+        return measure_batch(split(points[1]), surface, x_prev=split(points[0]), mask=split(rows))
+    return measure_batch(split(points[0]), surface, radius=radius, mask=split(rows))
 
 
 def sharded(detector, mesh: Mesh, *, axis: str | None = None):
@@ -155,8 +62,9 @@ def sharded(detector, mesh: Mesh, *, axis: str | None = None):
 
     Args:
       detector: ``all_to_all``, ``bucket_sort``, ``swept``, ``bucket_swept``,
-        or a function of the same form. Bucket detectors need
-        ``plan=plan_sharded(...)``: a plan for one device's rows.
+        or a function of the same form. The bucket detectors measure their
+        sizes for one device's rows from the concrete data, so call them
+        plainly (the call compiles itself), not under an outer ``jit``.
       mesh: a ``jax.sharding.Mesh``.
       axis: the mesh axis to split over; the mesh's only axis by default.
 
@@ -188,12 +96,14 @@ def sharded(detector, mesh: Mesh, *, axis: str | None = None):
         points = [_pad_rows(jnp.asarray(p), total) for p in points]
         rows = jnp.ones(num_rows, bool) if mask is None else jnp.asarray(mask)
         rows = _pad_rows(rows, total, False)
-        # Plans and other static values stay closed over; arrays go in replicated.
-        static = {k: v for k, v in kwargs.items() if v is None or isinstance(v, BucketPlan)}
+        static = {k: v for k, v in kwargs.items() if v is None}
         arrays = {k: v for k, v in kwargs.items() if k not in static}
+        on_device = detector
+        if detector is bucket_sort or detector is bucket_swept:
+            on_device = _sized(detector, points, surface, rows, num_shards, arrays)
 
         def on_one_device(surface, arrays, rows, *points):
-            return detector(*points, surface, mask=rows, **arrays, **static)
+            return on_device(*points, surface, mask=rows, **arrays, **static)
 
         def local(*args):
             result = on_one_device(*args)
@@ -228,6 +138,30 @@ def sharded(detector, mesh: Mesh, *, axis: str | None = None):
         )
 
     return run
+
+
+def _sized(detector, points, surface, rows, num_shards: int, arrays):
+    """``detector`` on one device's rows with sizes measured for them on the host."""
+    name = detector.__name__
+    _bucket._concrete_only(f"sharded({name})", (points, surface, rows, arrays))
+    if detector is bucket_swept:
+        x_prev, x, _ = _inputs.check_path_inputs(points[0], points[1], None)
+        surface = _inputs.check_surface(surface, x.dtype)
+        sizes = _device_sizes(detector, points, surface, rows, num_shards, None)
+
+        def crossing(x_prev, x, surface, *, mask):
+            return _bucket.crossing_jit(x_prev, x, surface, mask, sizes=sizes)
+
+        return crossing
+    x, surface, radius, _ = _inputs.check_contact_inputs(
+        points[0], surface, arrays.get("radius"), None
+    )
+    sizes = _device_sizes(detector, points, surface, rows, num_shards, radius)
+
+    def contact(x, surface, *, mask, radius):
+        return _bucket.contact_jit(x, surface, radius, mask, sizes=sizes)
+
+    return contact
 
 
 def contact_forces(

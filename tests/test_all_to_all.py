@@ -70,7 +70,7 @@ def test_first_index_wins_a_tie_across_segment_blocks(monkeypatch):
     # the block is shrunk instead: ten segments take three blocks, the last one
     # ragged. The second half repeats the first, so every slave ties exactly
     # between k and k + 5 and must get the lower index.
-    monkeypatch.setattr(jaxcontact._search, "_BLOCK", 4)
+    monkeypatch.setattr(jaxcontact._lowest, "_BLOCK", 4)
     scene = helpers.random_scene(7, 9, 5, np.float64)
     doubled = np.concatenate([scene.segments, scene.segments])
     # A fresh function, so that no cached trace made with the real block size is reused.

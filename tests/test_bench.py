@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from jaxcontact._cli import _parser
-from jaxcontact._timing import time_interleaved
+from jaxcontact.bench.timing import time_interleaved
 from jaxcontact.bench import _run, baselines, oracle, peers
 from jaxcontact.scenes import cutting_scene, paper_scene, rough_die_scene
 from tests.oracle import oracle_contact

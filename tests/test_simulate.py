@@ -14,9 +14,9 @@ import numpy as np
 import pytest
 
 from jaxcontact import _cli
-from jaxcontact._demo_sim import run_demo
+from jaxcontact.sim.demo import run_demo
 from jaxcontact.scenes import cutting_tool_outline
-from jaxcontact.simulate import mean_cutting_force, ploughing, run, simulate, tool_outline
+from jaxcontact.sim import mean_cutting_force, ploughing, run, simulate, tool_outline
 
 # The stated bound on penetration, as a fraction of the grid spacing (the
 # search radius): the default penalty (10 E per node) keeps it below this.

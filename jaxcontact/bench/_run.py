@@ -16,7 +16,7 @@ import sys
 import jax
 import numpy as np
 
-from jaxcontact._timing import pinned_note
+from jaxcontact.bench.timing import pinned_note
 from jaxcontact.bench import oracle
 
 COLUMNS = (

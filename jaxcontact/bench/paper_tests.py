@@ -24,7 +24,7 @@ import jax
 import numpy as np
 
 from jaxcontact import all_to_all, bucket_sort, bucket_swept, plan_buckets, replan, swept
-from jaxcontact._timing import compiled_call, time_interleaved
+from jaxcontact.bench.timing import compiled_call, time_interleaved
 from jaxcontact.bench import _run, baselines, oracle
 from jaxcontact.scenes import paper_scene
 

@@ -29,7 +29,7 @@ import jax
 import numpy as np
 
 from jaxcontact import all_to_all, bucket_sort, plan_buckets
-from jaxcontact._timing import Timing, compiled_call, time_interleaved
+from jaxcontact.bench.timing import Timing, compiled_call, time_interleaved
 from jaxcontact.bench import _run, baselines, oracle
 from jaxcontact.scenes import cutting_scene, rough_die_scene
 

@@ -27,7 +27,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxcontact import all_to_all, bucket_sort, plan_buckets
-from jaxcontact._timing import time_interleaved
+from jaxcontact.bench.timing import time_interleaved
 from jaxcontact.bench import _run, oracle
 from jaxcontact.scenes import Scene, cutting_scene, rough_die_scene
 

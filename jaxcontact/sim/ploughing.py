@@ -1,6 +1,6 @@
 """A rigid tool ploughing an elastic workpiece: contact detection inside a JAX simulation.
 
-The cutting scene of SCENES.md set in motion. The workpiece (``[0, 20] x [0, 5]``,
+The cutting scene of docs/scenes.md set in motion. The workpiece (``[0, 20] x [0, 5]``,
 the scene's grid cut into linear triangles, plane strain, linear elastic
 steel: E = 210,000 MPa, ν = 0.3, ρ = 7.85e-9 t/mm³; units mm, N, t, s) is
 fixed along its bottom edge. The rigid tool (the scene's outline, its rake
@@ -9,21 +9,20 @@ a depth of cut of 1. Every step:
 
 1. the tool's outline at its current place (``tool_outline``, jnp, so the
    run is differentiable in the rake angle);
-2. contact by ``bucket_sort`` for the slaves (by default the nodes of the
+2. contact by ``Search.closest`` for the slaves (by default the nodes of the
    workpiece's free outline, which meet the tool before any interior node
    can; ``slaves="all"`` takes every node, as the cutting scene does),
-   reusing a candidate list found with a skin;
-   the list is found again (``lax.cond``) only when ``candidates_expired``
-   says the nodes and the tool together moved more than the skin, as the
-   paper recomputes ``d_max`` only every n-th step;
+   which reuses the candidates found within ``radius + skin`` and finds
+   them again only when the nodes and the tool together moved more than the
+   skin, as the paper recomputes ``d_max`` only every n-th step;
 3. a penalty force ``k (-g) n`` on every active slave and the opposite, summed,
    on the tool (``contact_forces``): its x part is the cutting force, its y
    part the thrust force;
 4. central differences with lumped masses and a little mass-proportional
    damping: ``v += dt a``, ``u += dt v``.
 
-The whole run is one ``lax.scan`` under ``jit``; the plan's overflow flag is
-OR-ed over the steps and checked on the host after the run.
+The whole run is one ``lax.scan`` under ``jit``; the search state's overflow
+flag is OR-ed over the steps and checked on the host after the run.
 
 What it is not: there is no material separation (no chip forms: the tool
 ploughs and deforms the surface), no plasticity, no friction, no heat, and the
@@ -46,14 +45,12 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxcontact._bucket import bucket_sort, candidates_expired, find_candidates
-from jaxcontact._elastic import Material, Mesh, internal_forces, smallest_altitude
-from jaxcontact._elastic import workpiece_mesh as workpiece_mesh
-from jaxcontact._plan import BucketPlan, plan_buckets, replan
-from jaxcontact._shard import contact_forces
-from jaxcontact._tool import tool_outline as tool_outline
-from jaxcontact._tool import tool_surface as tool_surface
-from jaxcontact._types import Array, Surface
+from jaxcontact import Search, Sizes, Surface, contact_forces
+from jaxcontact.sim.elastic import Material, Mesh, internal_forces, smallest_altitude
+from jaxcontact.sim.elastic import workpiece_mesh as workpiece_mesh
+from jaxcontact.sim.tool import tool_outline as tool_outline
+from jaxcontact.sim.tool import tool_surface as tool_surface
+from jaxcontact._types import Array
 
 # Steel with its density scaled by 10^4: the default workpiece (see the module docstring).
 MASS_SCALED_STEEL = Material(mass_scale=1e4)
@@ -80,10 +77,12 @@ class Ploughing:
       speed: tool speed in ``-x`` (mm/s).
       x_tip_start: the tool tip's x at step 0.
       radius: contact search radius (mm); it must exceed every penetration.
-      skin: extra reach of the reused candidate lists (mm).
       damping: mass-proportional damping coefficient (1/s).
       material: the workpiece ``Material``.
-      plan: the bucket plan for ``radius + skin``, made on the host.
+      search: the contact ``Search`` (its radius and skin: the search radius
+        and the candidates' extra reach, mm).
+      sizes: its sizes, allocated on the host for the tool anywhere along
+        its travel.
       all_slaves: every node is a slave (as in the cutting scene); otherwise
         only ``mesh.boundary``'s nodes are.
     """
@@ -92,11 +91,10 @@ class Ploughing:
     dt: float
     speed: float
     x_tip_start: float
-    radius: float
-    skin: float
     damping: float
     material: Material
-    plan: BucketPlan
+    search: Search
+    sizes: Sizes
     all_slaves: bool = False
 
 
@@ -108,7 +106,7 @@ class History(NamedTuple):
     active: Array  # i32[T]  active slaves
     penetration: Array  # f[T]  deepest penetration -min(gap) of active slaves (mm)
     signature: Array  # i32[T]  sum over active slaves of (segment + 1): the contact set's print
-    rebuilt: Array  # bool[T]  the candidate list was found again at this step
+    rebuilt: Array  # bool[T]  the candidates were found again at this step
     energy: Array  # f[T]  kinetic + strain energy of the workpiece at the step (N mm per mm)
 
 
@@ -117,8 +115,8 @@ class Final(NamedTuple):
 
     displacement: Array  # f[N, 2]
     velocity: Array  # f[N, 2]
-    overflow: Array  # bool[]  the plan was too small at some step: a contact may be missing
-    rebuilds: Array  # i32[]  how often the candidate list was found again
+    overflow: Array  # bool[]  the sizes were too small at some step: a contact may be missing
+    rebuilds: Array  # i32[]  how often the candidates were found again
 
 
 def ploughing(
@@ -151,7 +149,7 @@ def ploughing(
       damping_ratio: mass-proportional damping as a fraction of critical for
         the workpiece's lowest shear mode (``ω₁ ≈ π c_s / 2H``).
       skin_factor: the skin as a fraction of the search radius (one grid spacing).
-      slack: the bucket plan's slack.
+      slack: the search sizes' slack.
       rake_degrees: the nominal rake angle.
       slaves: ``"surface"``: the nodes of the free outline (``mesh.boundary``),
         which meet the tool before any interior node can; ``"all"``: every
@@ -163,7 +161,7 @@ def ploughing(
 
     Example:
       >>> mesh, controls, config = ploughing(300, travel=0.1)
-      >>> mesh.nodes.shape, config.plan.num_slaves, config.steps
+      >>> mesh.nodes.shape, config.sizes.num_slaves, config.steps
       ((297, 2), 47, 24)
     """
     if num_nodes < 4:
@@ -185,12 +183,12 @@ def ploughing(
     shear_speed = math.sqrt(mu / (material.density * material.mass_scale))
     damping = 2 * damping_ratio * math.pi * shear_speed / (2 * float(np.ptp(nodes[:, 1])))
     radius, x_tip_start = spacing, 20.02
-    skin = skin_factor * radius
     steps = max(1, math.ceil(travel / (speed * dt)))
     rake = math.radians(rake_degrees)
     x_tip_end = x_tip_start - speed * dt * steps
-    # One plan for the tool at both ends of its travel: planned against the
-    # two outlines together, it keeps every block either one keeps.
+    # Sizes for the tool anywhere along its travel: allocated against the
+    # outlines at both ends together, whose inflated box holds the tool's
+    # at every step, so they keep every block any step keeps.
     ends = [np.asarray(tool_outline(x_tip, rake)) for x_tip in (x_tip_start, x_tip_end)]
     count = len(ends[0])
     starts = np.arange(2 * count)
@@ -199,12 +197,10 @@ def ploughing(
         jnp.asarray(np.stack([starts, starts // count * count + (starts + 1) % count], axis=-1)),
     )
     slave_nodes = nodes if slaves == "all" else nodes[np.asarray(mesh.boundary)]
-    plan = plan_buckets(
-        jnp.asarray(slave_nodes, dtype), both, radius=radius + skin, slack=slack, use_cells=False
-    )
-    config = Ploughing(
-        steps, dt, speed, x_tip_start, radius, skin, damping, material, plan, slaves == "all"
-    )
+    search = Search(radius=radius, skin=skin_factor * radius, method="dense", slack=slack)
+    sizes = search.allocate(jnp.asarray(slave_nodes, dtype), both).sizes
+    config = Ploughing(steps, dt, speed, x_tip_start, damping, material, search, sizes,
+                       slaves == "all")  # fmt: skip
     controls = Controls(jnp.asarray(rake, dtype), jnp.asarray(stiffness, dtype))
     return mesh, controls, config
 
@@ -224,16 +220,15 @@ def run(
 
     Returns:
       ``(Final, History)``. Check ``final.overflow`` on the host: when True a
-      contact may have been missed; ``simulate`` replans and runs again (its
-      example calls this).
+      contact may have been missed; ``simulate`` allocates larger sizes and
+      runs again (its example calls this).
     """
-    material, plan, dt = config.material, config.plan, config.dt
+    material, search, dt = config.material, config.search, config.dt
     dtype = mesh.nodes.dtype
     rake = controls.rake.astype(dtype)
     inverse_mass = jnp.where(mesh.free, 1 / mesh.mass, 0)[:, None]
     decay = (1 - config.damping * dt / 2) / (1 + config.damping * dt / 2)
     kick = dt / (1 + config.damping * dt / 2)
-    reach = {"radius": config.radius, "plan": plan}
 
     def slaves_of(u):
         x = mesh.nodes + u
@@ -242,25 +237,22 @@ def run(
     def on_nodes(on_slaves):
         return on_slaves if config.all_slaves else zero.at[mesh.boundary].add(on_slaves)
 
-    def find(x, surface):
-        return find_candidates(x, surface, skin=config.skin, **reach)
-
     zero = jnp.zeros_like(mesh.nodes)
     start = tool_surface(config.x_tip_start, rake)
-    near = find(slaves_of(zero), start)
-    at_rest = bucket_sort(slaves_of(zero), start, candidates=near, **reach)
+    state = search.init(slaves_of(zero), start, sizes=config.sizes)
+    at_rest, _ = search.closest(state, slaves_of(zero), start)
 
     def step(carry, index):
-        u, v, near, overflow, rebuilds = carry
+        u, v, state = carry
         x_tip = config.x_tip_start - config.speed * dt * index.astype(dtype)
         surface = tool_surface(x_tip, rake)
         x = slaves_of(u)
         if detect:
-            expired = candidates_expired(near, x, surface)
-            near = jax.lax.cond(expired, find, lambda x, surface: near, x, surface)
-            contact = bucket_sort(x, surface, candidates=near, **reach)
+            rebuilds = state.rebuilds
+            contact, state = search.closest(state, x, surface)
+            rebuilt = state.rebuilds > rebuilds
         else:
-            expired, contact = jnp.zeros((), bool), at_rest
+            rebuilt, contact = jnp.zeros((), bool), at_rest
         on_slaves, on_tool = contact_forces(contact, controls.stiffness)
         elastic = internal_forces(mesh, u, material)
         force = elastic + on_nodes(on_slaves)
@@ -276,19 +268,18 @@ def run(
             jnp.sum(contact.active, dtype=jnp.int32),
             jnp.max(depth, initial=0),
             jnp.sum(jnp.where(contact.active, contact.segment + 1, 0), dtype=jnp.int32),
-            expired,
+            rebuilt,
             energy,
         )
-        carry = (u, v, near, overflow | contact.overflow, rebuilds + expired.astype(jnp.int32))
-        return carry, row
+        return (u, v, state), row
 
-    begin = (zero, zero, near, near.overflow, jnp.zeros((), jnp.int32))
+    begin = (zero, zero, state)
     # Rematerialised under differentiation: the backward pass keeps only each
     # step's carry, not every element's intermediates (O(steps x N) either
     # way, but some twenty times less).
     step = jax.checkpoint(step, prevent_cse=False)
-    (u, v, _, overflow, rebuilds), history = jax.lax.scan(step, begin, jnp.arange(config.steps))
-    return Final(u, v, overflow, rebuilds), history
+    (u, v, state), history = jax.lax.scan(step, begin, jnp.arange(config.steps))
+    return Final(u, v, state.overflow, state.rebuilds), history
 
 
 def mean_cutting_force(mesh: Mesh, controls: Controls, config: Ploughing) -> Array:
@@ -310,10 +301,11 @@ def mean_cutting_force(mesh: Mesh, controls: Controls, config: Ploughing) -> Arr
 def simulate(
     mesh: Mesh, controls: Controls, config: Ploughing, *, tries: int = 3
 ) -> tuple[Final, History, Ploughing]:
-    """``run``, with the overflow flag checked after it: on overflow, replan and run again.
+    """``run``, with the overflow flag checked after it: on overflow, allocate
+    larger sizes (never smaller than the last) and run again.
 
     Returns:
-      ``(final, history, config)``, ``config`` holding the plan that held.
+      ``(final, history, config)``, ``config`` holding the sizes that held.
 
     Example:
       >>> mesh, controls, config = ploughing(300, travel=0.1)
@@ -328,6 +320,7 @@ def simulate(
         x = mesh.nodes + final.displacement
         x = x if config.all_slaves else x[mesh.boundary]
         surface = tool_surface(float(history.x_tip[-1]), controls.rake)
-        bigger = replan(config.plan, x, surface, radius=config.radius + config.skin, slack=3.0)
-        config = dataclasses.replace(config, plan=bigger)
-    raise RuntimeError(f"the bucket plan still overflowed after {tries} runs: {config.plan}")
+        search = dataclasses.replace(config.search, slack=3.0)
+        bigger = search.allocate(x, surface, at_least=config.sizes).sizes
+        config = dataclasses.replace(config, sizes=bigger)
+    raise RuntimeError(f"the search sizes still overflowed after {tries} runs: {config.sizes}")

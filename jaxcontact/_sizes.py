@@ -1,12 +1,12 @@
-"""Plans: the static sizes of a bucket sort, made on the host from concrete data.
+"""Sizes: the static capacities of a bucket sort, measured on the host from concrete data.
 
 As jax-md separates ``allocate`` (host, sizes from data) from ``update``
-(jitted, fixed sizes), ``plan_buckets`` looks at one configuration and returns
-a hashable ``BucketPlan``; ``bucket_sort`` and ``bucket_swept`` run under
-``jit`` with it as a static argument. Every capacity is the measured need
-times ``slack``, so the plan lasts while the scene changes by less than that;
-past it, ``overflow`` turns True and ``replan`` makes a larger one. A new plan
-means a new compilation.
+(jitted, fixed sizes), ``measure`` looks at one configuration and returns
+hashable ``Sizes``; ``Search.allocate`` keeps them in the search state as
+static fields. Every capacity is the measured need times ``slack``, so the
+sizes last while the scene changes by less than that; past it, ``overflow``
+turns True and ``largest(old, measure(...))`` makes larger ones. New sizes
+mean a new compilation.
 """
 
 from __future__ import annotations
@@ -27,13 +27,17 @@ from jaxcontact._types import Array, Surface
 
 # With this many segments or fewer, each kept slave meets every segment: a
 # running minimum over M broadcast segments beats per-slave candidate gathers
-# (benchmarks/bucket.py measures the crossover).
-DENSE_LIMIT = 48
+# (benchmarks/bucket.py measures the crossover). ``Search(cells_above=...)``.
+CELLS_ABOVE = 48
+# Kept slaves are searched in chunks of this many rows, fullest lists first.
+CHUNK_ROWS = 2048
 
 
 @dataclasses.dataclass(frozen=True)
-class BucketPlan:
-    """Static sizes of a bucket sort. Hashable: pass it to ``jit`` as a static argument.
+class Sizes:
+    """Static sizes of a bucket sort: hashable, a static field of ``SearchState``.
+
+    A change of any field compiles the detectors anew.
 
     Attributes:
       num_slaves: N, the slave count the plan was made for.
@@ -46,6 +50,7 @@ class BucketPlan:
       cell_size: smallest cell edge; cells grow when the region outgrows the grid.
       span: most cells a segment's inflated box may cover, in x and in y.
       cell_capacity: most segments one cell may hold.
+      chunk_rows: kept slaves searched together, longest cell lists first.
     """
 
     num_slaves: int
@@ -57,6 +62,7 @@ class BucketPlan:
     cell_size: float = 0.0
     span: tuple[int, int] = (1, 1)
     cell_capacity: int = 1
+    chunk_rows: int = CHUNK_ROWS
 
     @property
     def slave_capacity(self) -> int:
@@ -69,7 +75,7 @@ def _grow(count: float, slack: float, least: int = 1) -> int:
 
 
 class _Measured(NamedTuple):
-    """What ``plan_buckets`` reads off a configuration (one compiled program)."""
+    """What ``measure`` reads off a configuration (one compiled program)."""
 
     num_blocks: Array  # i32[]  blocks of slaves that meet the master's box
     rows: Array  # i32[B * block_size]  their rows, N past the end
@@ -114,7 +120,7 @@ def _fullest_cell(boxes: Box, ok: Array, grid: Grid, shape, span) -> Array:
     return jnp.max(bins.count, initial=0)
 
 
-def plan_buckets(
+def measure(
     x: Array,
     surface: Surface,
     *,
@@ -124,34 +130,38 @@ def plan_buckets(
     slack: float = 1.5,
     block_size: int = 64,
     use_cells: bool | None = None,
+    cells_above: int = CELLS_ABOVE,
     cell_factor: float = 1.0,
     cell_size: float | None = None,
-) -> BucketPlan:
+    chunk_rows: int = CHUNK_ROWS,
+) -> Sizes:
     """Sizes a bucket sort for this configuration, with room to spare.
 
     Args:
       x: f[N, 2] concrete slave coordinates.
       surface: the concrete master.
-      radius: the search radius (for ``bucket_sort``).
-      x_prev: f[N, 2] previous positions; give it (and no radius) to plan
-        ``bucket_swept``.
+      radius: the search radius (closest points).
+      x_prev: f[N, 2] previous positions; give it (and no radius) to size
+        the swept search.
       mask: optional bool[N] slave mask.
       slack: every measured capacity is multiplied by this.
       block_size: slaves culled together; smaller blocks cull tighter but cost
         a longer block pass.
       use_cells: force cell binning on or off; by default on above
-        ``DENSE_LIMIT`` segments.
+        ``cells_above`` segments.
+      cells_above: the segment count above which cells are used by default.
       cell_factor: cell edge as a multiple of (twice the search distance plus
         the median segment extent).
       cell_size: the cell edge itself, instead of one chosen from the data
-        (``plan_batch`` sizes every scene of a batch at one edge).
+        (``measure_batch`` sizes every scene of a batch at one edge).
+      chunk_rows: kept slaves searched together.
 
     Returns:
-      A ``BucketPlan``.
+      ``Sizes``.
     """
     if (radius is None) == (x_prev is None):
         raise ValueError(
-            "plan_buckets needs radius= (for bucket_sort) or x_prev= (for bucket_swept)"
+            "measure needs radius= (for bucket_sort) or x_prev= (for bucket_swept)"
         )
     if slack < 1:
         raise ValueError(f"slack must be >= 1; got {slack}")
@@ -171,15 +181,15 @@ def plan_buckets(
     block_size = max(1, min(block_size, max(num_rows, 1)))
     num_blocks = -(-num_rows // block_size)
     if use_cells is None:
-        use_cells = num_segments > DENSE_LIMIT
-    # Plans of scenes with nothing to bin still say whether cells are used, so
-    # that ``replan`` and ``plan_batch`` keep the choice when they grow them.
+        use_cells = num_segments > cells_above
+    # Sizes of scenes with nothing to bin still say whether cells are used, so
+    # that ``largest`` keeps the choice when they grow.
     if num_rows == 0 or num_segments == 0:
-        return BucketPlan(num_rows, block_size, 1, for_paths, use_cells)
+        return Sizes(num_rows, block_size, 1, for_paths, use_cells, chunk_rows=chunk_rows)
     found = _measure(x_prev, x, surface, radius, mask, block_size, num_blocks)
     block_capacity = min(num_blocks, _grow(int(found.num_blocks), slack))
     if not use_cells:
-        return BucketPlan(num_rows, block_size, block_capacity, for_paths)
+        return Sizes(num_rows, block_size, block_capacity, for_paths, chunk_rows=chunk_rows)
 
     # The cells: sized from what the narrow phase will see.
     kept = np.asarray(found.rows)
@@ -188,7 +198,9 @@ def plan_buckets(
     points = np.asarray(found.query)[kept]
     ok = np.asarray(found.segment_ok)
     if points.size == 0 or not ok.any():
-        return BucketPlan(num_rows, block_size, block_capacity, for_paths, use_cells)
+        return Sizes(
+            num_rows, block_size, block_capacity, for_paths, use_cells, chunk_rows=chunk_rows
+        )
     low = np.maximum(np.asarray(found.master.low), points.min(axis=0))
     high = np.minimum(np.asarray(found.master.high), points.max(axis=0))
     extent = np.maximum(high - low, 0.0)
@@ -204,7 +216,7 @@ def plan_buckets(
     span = tuple(int(math.ceil(w * slack / cell_size)) + 1 for w in widths.max(axis=0))
     grid = Grid(jnp.asarray(low, x.dtype), jnp.asarray(cell_size, x.dtype))
     most_per_cell = int(_fullest_cell(found.boxes, found.segment_ok, grid, grid_shape, span))
-    return BucketPlan(
+    return Sizes(
         num_slaves=num_rows,
         block_size=block_size,
         block_capacity=block_capacity,
@@ -214,28 +226,48 @@ def plan_buckets(
         cell_size=float(cell_size),
         span=span,
         cell_capacity=_grow(most_per_cell, slack),
+        chunk_rows=chunk_rows,
     )
 
 
-def replan(plan: BucketPlan, x: Array, surface: Surface, **kwargs) -> BucketPlan:
-    """A plan for the current data that is nowhere smaller than ``plan``.
-
-    Call it when a result's ``overflow`` is True, then detect again (the new
-    plan compiles once). Keyword arguments are those of ``plan_buckets``.
-    """
-    kwargs = {"block_size": plan.block_size, "use_cells": plan.use_cells, **kwargs}
-    fresh = plan_buckets(x, surface, **kwargs)
-    fresh = dataclasses.replace(fresh, use_cells=fresh.use_cells or plan.use_cells)
-    if fresh.cell_size == 0:  # nothing to bin now: keep the cells measured before
-        fresh = dataclasses.replace(fresh, cell_size=plan.cell_size)
-    if fresh.for_paths != plan.for_paths or not plan.use_cells:
-        return dataclasses.replace(
-            fresh, block_capacity=max(fresh.block_capacity, plan.block_capacity)
-        )
+def largest(first: Sizes, second: Sizes) -> Sizes:
+    """Each capacity the larger of two ``Sizes`` of one detector: sizes that
+    hold whatever either holds (the grid also grows at run time when its
+    region does)."""
+    if (first.num_slaves, first.for_paths) != (second.num_slaves, second.for_paths):
+        raise ValueError(f"sizes of different searches cannot be merged: {first}, {second}")
     return dataclasses.replace(
-        fresh,
-        block_capacity=max(fresh.block_capacity, plan.block_capacity),
-        grid_shape=tuple(map(max, fresh.grid_shape, plan.grid_shape)),
-        span=tuple(map(max, fresh.span, plan.span)),
-        cell_capacity=max(fresh.cell_capacity, plan.cell_capacity),
+        first,
+        block_capacity=max(first.block_capacity, second.block_capacity),
+        use_cells=first.use_cells or second.use_cells,
+        grid_shape=tuple(map(max, first.grid_shape, second.grid_shape)),
+        cell_size=max(first.cell_size, second.cell_size),
+        span=tuple(map(max, first.span, second.span)),
+        cell_capacity=max(first.cell_capacity, second.cell_capacity),
     )
+
+
+def measure_batch(x, surface: Surface, *, x_prev=None, mask=None, **kwargs) -> Sizes:
+    """One ``Sizes`` for every scene of a batch: ``x`` f[B, N, 2]; ``surface``,
+    ``x_prev`` and ``mask`` batched the same way (a surface may be shared).
+
+    Each scene is measured, then measured again at the largest cell edge, so
+    that the largest of each capacity holds for all.
+    """
+    x = np.asarray(x)
+    shared = np.ndim(surface.nodes) == 2
+
+    def scene(values, index):
+        return None if values is None else np.asarray(values)[index]
+
+    def sized(index, **extra):
+        own = surface if shared else jax.tree.map(lambda leaf: leaf[index], surface)
+        return measure(
+            x[index], own, x_prev=scene(x_prev, index), mask=scene(mask, index), **kwargs, **extra
+        )
+
+    alone = [sized(index) for index in range(x.shape[0])]
+    edge = max(sizes.cell_size for sizes in alone)
+    if edge > 0 and kwargs.get("cell_size") is None:
+        alone = [sized(index, cell_size=edge) for index in range(x.shape[0])]
+    return functools.reduce(largest, alone)

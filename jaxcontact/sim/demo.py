@@ -21,9 +21,9 @@ import jax
 import numpy as np
 
 from jaxcontact import all_to_all
-from jaxcontact._elastic import stresses, von_mises
-from jaxcontact._timing import Timing, pinned_note
-from jaxcontact.simulate import History, ploughing, run, simulate, tool_surface
+from jaxcontact.sim.elastic import stresses, von_mises
+from jaxcontact.bench.timing import Timing, pinned_note
+from jaxcontact.sim.ploughing import History, ploughing, run, simulate, tool_surface
 
 
 class Summary(NamedTuple):
