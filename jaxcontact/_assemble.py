@@ -12,9 +12,9 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
-from jaxcontact._sort import stable_order
 from jaxcontact._geometry import cross_sign, dot, path_hit, project, unit_normal
 from jaxcontact._inputs import Segments
+from jaxcontact._sort import stable_order
 from jaxcontact._types import Array, Contact, Crossing
 
 
@@ -66,9 +66,10 @@ def prefer_outside(x: Array, segments: Segments, choice: Array) -> tuple[Array, 
     and only when it is outside BOTH at a concave one (right turn). So the
     face with the larger signed normal distance (x - v) . n is taken at a
     convex corner, the smaller at a concave one, and the gap's sign is that
-    face's. API.md gives such ties to the lower index, which reports slaves
-    in the blind spot beyond a sharp convex corner (the tool tip) as
-    penetrating, and slaves inside a sharp concave notch as outside. Only
+    face's. The first contract gave such ties to the lower index, which
+    reports slaves in the blind spot beyond a sharp convex corner (the tool
+    tip) as penetrating, and slaves inside a sharp concave notch as outside
+    (docs/contract.md, "Changes from the first contract"). Only
     neighbours that share the node index are seen.
 
     ``sign`` (f[N]) is the gap's sign at a vertex tie (+1 or -1; 0 where

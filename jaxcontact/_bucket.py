@@ -21,6 +21,7 @@ candidates found with a skin, across steps.
 from __future__ import annotations
 
 import functools
+from collections.abc import Callable
 from typing import NamedTuple
 
 import jax
@@ -64,7 +65,8 @@ def find(x, surface: Surface, reach, mask, sizes: Sizes) -> Candidates:
     if sizes.use_cells:
         kept, ok = kept_rows(x, slave_ok, blocks)
         listed, cells_overflow = list_candidates(kept, ok, segments, boxes, sizes)
-        overflow = overflow | cells_overflow
+        # Cells no kept slave looks up cannot lose a candidate.
+        overflow = overflow | (cells_overflow & (blocks.count > 0))
     x, nodes = jax.lax.stop_gradient((x, surface.nodes))
     return Candidates(blocks, listed, x, nodes, slave_ok, segments.ok, segments.indices, overflow)
 
@@ -91,6 +93,16 @@ def expired(candidates: Candidates, x, surface: Surface, mask, skin) -> Array:
     return (moved > skin) | new_rows | new_segments | rejoined
 
 
+class _How(NamedTuple):
+    """How one detector searches its kept slaves: static, closed over."""
+
+    kernel: Callable  # kernel(*row, a, b) -> f[]: a pair's score
+    sizes: Sizes
+    assemble: Callable  # assemble(choice, overflow) -> Contact | Crossing of the kept slaves
+    empty: Callable  # empty(rows, overflow) -> the not-found result
+    num_rows: int  # N
+
+
 def _choose_if(kernel, sizes: Sizes, go, queries: Queries, segments: Segments, boxes, listed):
     """(i32[S] choice, bool[] cells overflow) of the kept slaves; all -1 unless ``go``."""
 
@@ -101,29 +113,29 @@ def _choose_if(kernel, sizes: Sizes, go, queries: Queries, segments: Segments, b
     return in_stages(go, [search], [no_choice])
 
 
-def _search_kept(queries: Queries, blocks: Blocks, segments: Segments, boxes, listed, *, kernel,
-                 sizes: Sizes, assemble, empty, num_rows: int):  # fmt: skip
+def _search_kept(queries: Queries, blocks: Blocks, segments: Segments, boxes, listed, how: _How):
     """The narrow phase on the kept slaves and their rows written back.
 
-    Search, ``assemble(choice, overflow)`` and the scatter into ``num_rows``
-    rows are each skipped when no block was kept (``_narrow.in_stages``);
-    the search runs scene by scene under ``vmap``
-    (``_lowest.one_scene_at_a_time``). ``empty(rows, overflow)`` makes a
-    not-found result.
+    Search, ``how.assemble(choice, overflow)`` and the scatter into
+    ``how.num_rows`` rows are each skipped when no block was kept
+    (``_narrow.in_stages``); the search runs scene by scene under ``vmap``
+    (``_lowest.one_scene_at_a_time``).
     """
     no_overflow = jnp.zeros((), bool)
     go = blocks.count > 0
-    search = one_scene_at_a_time(functools.partial(_choose_if, kernel, sizes))
+    search = one_scene_at_a_time(functools.partial(_choose_if, how.kernel, how.sizes))
     chosen = search(go, *jax.lax.stop_gradient((queries, segments, boxes)), listed)
-    template = jnp.zeros((num_rows, 2), queries.query.dtype)
+    template = jnp.zeros((how.num_rows, 2), queries.query.dtype)
 
     def write(part):
-        return scatter_blocks(part, blocks, empty(template, part.overflow), sizes.block_size)
+        return scatter_blocks(
+            part, blocks, how.empty(template, part.overflow), how.sizes.block_size
+        )
 
     return in_stages(
         go,
-        [lambda chosen: assemble(*chosen), write],
-        [empty(queries.query, no_overflow), empty(template, no_overflow)],
+        [lambda chosen: how.assemble(*chosen), write],
+        [how.empty(queries.query, no_overflow), how.empty(template, no_overflow)],
         chosen,
     )
 
@@ -148,10 +160,8 @@ def _contact(x, surface, radius, mask, sizes: Sizes, candidates: Candidates | No
     def assemble(choice, cells_overflow):
         return contact_from_choice(kept, segments, choice, radius, cells_overflow, ok)
 
-    result = _search_kept(
-        Queries((kept,), kept, ok), blocks, segments, boxes, listed, kernel=squared_distance,
-        sizes=sizes, assemble=assemble, empty=empty_contact, num_rows=x.shape[0],
-    )  # fmt: skip
+    how = _How(squared_distance, sizes, assemble, empty_contact, x.shape[0])
+    result = _search_kept(Queries((kept,), kept, ok), blocks, segments, boxes, listed, how)
     return result._replace(overflow=result.overflow | overflow)
 
 
@@ -177,10 +187,8 @@ def _crossing(x_prev, x, surface, mask, sizes: Sizes):
     def assemble(choice, overflow):
         return crossing_from_choice(start, end, segments, choice, overflow, ok)
 
-    result = _search_kept(
-        Queries((start, end), start, ok), blocks, segments, boxes, None, kernel=first_hit_time,
-        sizes=sizes, assemble=assemble, empty=empty_crossing, num_rows=x.shape[0],
-    )  # fmt: skip
+    how = _How(first_hit_time, sizes, assemble, empty_crossing, x.shape[0])
+    result = _search_kept(Queries((start, end), start, ok), blocks, segments, boxes, None, how)
     return result._replace(overflow=result.overflow | blocks.overflow)
 
 

@@ -1,7 +1,7 @@
 """The ``jaxcontact`` command line.
 
 ``jaxcontact demo`` runs the ploughing simulation (``jaxcontact.sim.demo``);
-``jaxcontact demo --scene paper`` runs the source paper's scene (SCENES.md,
+``jaxcontact demo --scene paper`` runs the source paper's scene (docs/scenes.md,
 Test 1) through both dense detectors, prints what they found and how long
 they took, and draws the scene near the tool tip. Each subcommand is one ``_<name>`` function
 registered in ``_parser``, so new ones (``bench``) slot in beside it.
@@ -18,11 +18,11 @@ import jax
 import numpy as np
 
 from jaxcontact import all_to_all, swept
-from jaxcontact.sim import demo as _demo_sim
-from jaxcontact.bench.timing import pinned_note, time_call
 from jaxcontact.bench import add_arguments as add_bench_arguments
 from jaxcontact.bench import run_all as run_bench
+from jaxcontact.bench.timing import pinned_note, time_call
 from jaxcontact.scenes import paper_scene
+from jaxcontact.sim import demo as _demo_sim
 
 # Drawn around the tool tip T = (50.9, 7): the rake and clearance faces, the
 # nodes pushed into them and the paths that cross them all fall inside.

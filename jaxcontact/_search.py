@@ -84,7 +84,8 @@ class Search:
       >>> bool((contact.segment == dense.segment).all())
       True
       >>> crossing, state = search.swept(state, scene.x_prev, scene.x, scene.surface)
-      >>> int(crossing.crossed.sum()) == int(jaxcontact.swept(scene.x_prev, scene.x, scene.surface).crossed.sum())
+      >>> dense = jaxcontact.swept(scene.x_prev, scene.x, scene.surface)
+      >>> int(crossing.crossed.sum()) == int(dense.crossed.sum()) > 0
       True
 
     Attributes:
@@ -175,14 +176,14 @@ class Search:
         overflow = jnp.zeros((), bool)
         if self.method != "exhaustive":
             if self.radius is not None:
-                sizes = self._merged(measure(x, surface, radius=self._reach, mask=mask,
-                                             **self._sizing), at_least, "sizes")  # fmt: skip
+                sizes = measure(x, surface, radius=self._reach, mask=mask, **self._sizing)
+                sizes = self._merged(sizes, at_least, "sizes")
                 reach = jnp.asarray(self._reach, x.dtype)
                 candidates = _bucket.find_jit(x, surface, reach, mask, sizes=sizes)
                 overflow = candidates.overflow
             if x_prev is not None:
-                path_sizes = self._merged(measure(x, surface, x_prev=x_prev, mask=mask,
-                                                  **self._sizing), at_least, "path_sizes")  # fmt: skip
+                path_sizes = measure(x, surface, x_prev=x_prev, mask=mask, **self._sizing)
+                path_sizes = self._merged(path_sizes, at_least, "path_sizes")
         return SearchState(sizes, path_sizes, candidates, overflow, jnp.zeros((), jnp.int32))
 
     def _allocate_batch(self, x, surface, x_prev, mask, at_least) -> SearchState:
@@ -242,8 +243,13 @@ class Search:
     @property
     def _sizing(self) -> dict:
         use_cells = {"auto": None, "binned": True, "dense": False}[self.method]
-        return dict(slack=self.slack, block_size=self.block_size, use_cells=use_cells,
-                    cells_above=self.cells_above, chunk_rows=self.chunk_rows)  # fmt: skip
+        return {
+            "slack": self.slack,
+            "block_size": self.block_size,
+            "use_cells": use_cells,
+            "cells_above": self.cells_above,
+            "chunk_rows": self.chunk_rows,
+        }
 
     @staticmethod
     def _merged(sizes: Sizes, at_least, field: str) -> Sizes:
@@ -281,7 +287,9 @@ class Search:
         if self.method == "exhaustive":
             return _dense._all_to_all(x, surface, radius, mask), state
         if state.sizes is None:
-            raise ValueError("state has no closest-point sizes: make it with this search's allocate")
+            raise ValueError(
+                "state has no closest-point sizes: make it with this search's allocate"
+            )
         _bucket.check_sizes(state.sizes, x.shape[0], for_paths=False)
         return _closest(self, state, x, surface, mask)
 

@@ -108,9 +108,16 @@ def _measure(x_prev, x, surface, radius, mask, block_size: int, num_blocks: int)
     boxes = segment_boxes(segments, reach)
     extents = jnp.max(jnp.abs(segments.end - segments.start), axis=-1)
     return _Measured(
-        blocks.count, blocks.rows, slave_ok, query, reach, boxes, enclosing(boxes), segments.ok,
-        extents,
-    )  # fmt: skip
+        num_blocks=blocks.count,
+        rows=blocks.rows,
+        slave_ok=slave_ok,
+        query=query,
+        reach=reach,
+        boxes=boxes,
+        master=enclosing(boxes),
+        segment_ok=segments.ok,
+        extents=extents,
+    )
 
 
 @functools.partial(jax.jit, static_argnames=("shape", "span"))
@@ -160,9 +167,7 @@ def measure(
       ``Sizes``.
     """
     if (radius is None) == (x_prev is None):
-        raise ValueError(
-            "measure needs radius= (for bucket_sort) or x_prev= (for bucket_swept)"
-        )
+        raise ValueError("measure needs radius= (for bucket_sort) or x_prev= (for bucket_swept)")
     if slack < 1:
         raise ValueError(f"slack must be >= 1; got {slack}")
     if not cell_factor > 0:
@@ -186,36 +191,36 @@ def measure(
     # that ``largest`` keeps the choice when they grow.
     if num_rows == 0 or num_segments == 0:
         return Sizes(num_rows, block_size, 1, for_paths, use_cells, chunk_rows=chunk_rows)
-    found = _measure(x_prev, x, surface, radius, mask, block_size, num_blocks)
-    block_capacity = min(num_blocks, _grow(int(found.num_blocks), slack))
+    measured = _measure(x_prev, x, surface, radius, mask, block_size, num_blocks)
+    block_capacity = min(num_blocks, _grow(int(measured.num_blocks), slack))
     if not use_cells:
         return Sizes(num_rows, block_size, block_capacity, for_paths, chunk_rows=chunk_rows)
 
     # The cells: sized from what the narrow phase will see.
-    kept = np.asarray(found.rows)
+    kept = np.asarray(measured.rows)
     kept = kept[kept < num_rows]
-    kept = kept[np.asarray(found.slave_ok)[kept]]
-    points = np.asarray(found.query)[kept]
-    ok = np.asarray(found.segment_ok)
+    kept = kept[np.asarray(measured.slave_ok)[kept]]
+    points = np.asarray(measured.query)[kept]
+    ok = np.asarray(measured.segment_ok)
     if points.size == 0 or not ok.any():
         return Sizes(
             num_rows, block_size, block_capacity, for_paths, use_cells, chunk_rows=chunk_rows
         )
-    low = np.maximum(np.asarray(found.master.low), points.min(axis=0))
-    high = np.minimum(np.asarray(found.master.high), points.max(axis=0))
+    low = np.maximum(np.asarray(measured.master.low), points.min(axis=0))
+    high = np.minimum(np.asarray(measured.master.high), points.max(axis=0))
     extent = np.maximum(high - low, 0.0)
-    lengths = np.asarray(found.extents)[ok]
+    lengths = np.asarray(measured.extents)[ok]
     if cell_size is None:
-        cell_size = cell_factor * (2 * float(found.reach) + float(np.median(lengths)))
+        cell_size = cell_factor * (2 * float(measured.reach) + float(np.median(lengths)))
         # Keep the grid O(slaves kept): no more cells than 4 per kept slave.
         most_cells = max(64, 4 * len(points))
         while np.prod(np.ceil(extent * slack / cell_size) + 1) > most_cells:
             cell_size *= 1.25
     grid_shape = tuple(int(v) for v in np.ceil(extent * slack / cell_size).astype(int) + 1)
-    widths = (np.asarray(found.boxes.high) - np.asarray(found.boxes.low))[ok]
+    widths = (np.asarray(measured.boxes.high) - np.asarray(measured.boxes.low))[ok]
     span = tuple(int(math.ceil(w * slack / cell_size)) + 1 for w in widths.max(axis=0))
     grid = Grid(jnp.asarray(low, x.dtype), jnp.asarray(cell_size, x.dtype))
-    most_per_cell = int(_fullest_cell(found.boxes, found.segment_ok, grid, grid_shape, span))
+    most_per_cell = int(_fullest_cell(measured.boxes, measured.segment_ok, grid, grid_shape, span))
     return Sizes(
         num_slaves=num_rows,
         block_size=block_size,

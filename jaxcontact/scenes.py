@@ -1,4 +1,4 @@
-"""The reference scenes of SCENES.md, built for any size and tool position.
+"""The reference scenes of docs/scenes.md, built for any size and tool position.
 
 Every builder returns a ``Scene``: slave coordinates before and after the
 step (``x_prev`` equals ``x`` where nothing moves), the master ``Surface`` and

@@ -46,11 +46,11 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxcontact import Search, Sizes, Surface, contact_forces
+from jaxcontact._types import Array
 from jaxcontact.sim.elastic import Material, Mesh, internal_forces, smallest_altitude
 from jaxcontact.sim.elastic import workpiece_mesh as workpiece_mesh
 from jaxcontact.sim.tool import tool_outline as tool_outline
 from jaxcontact.sim.tool import tool_surface as tool_surface
-from jaxcontact._types import Array
 
 # Steel with its density scaled by 10^4: the default workpiece (see the module docstring).
 MASS_SCALED_STEEL = Material(mass_scale=1e4)
@@ -172,8 +172,7 @@ def ploughing(
         raise ValueError(f'slaves must be "surface" or "all"; got {slaves!r}')
     mesh = workpiece_mesh(num_nodes, material, dtype=dtype)
     nodes = np.asarray(mesh.nodes, np.float64)
-    spacing = float(max(np.ptp(nodes[:, 0]) / (len(np.unique(nodes[:, 0])) - 1),
-                        np.ptp(nodes[:, 1]) / (len(np.unique(nodes[:, 1])) - 1)))  # fmt: skip
+    spacing = max(float(np.ptp(values) / (len(np.unique(values)) - 1)) for values in nodes.T)
     stiffness = stiffness_factor * material.young * 1.0
     lightest = float(np.asarray(mesh.mass).min())
     elastic = 2 * material.wave_speed / smallest_altitude(mesh)
@@ -199,8 +198,8 @@ def ploughing(
     slave_nodes = nodes if slaves == "all" else nodes[np.asarray(mesh.boundary)]
     search = Search(radius=radius, skin=skin_factor * radius, method="dense", slack=slack)
     sizes = search.allocate(jnp.asarray(slave_nodes, dtype), both).sizes
-    config = Ploughing(steps, dt, speed, x_tip_start, damping, material, search, sizes,
-                       slaves == "all")  # fmt: skip
+    all_slaves = slaves == "all"
+    config = Ploughing(steps, dt, speed, x_tip_start, damping, material, search, sizes, all_slaves)
     controls = Controls(jnp.asarray(rake, dtype), jnp.asarray(stiffness, dtype))
     return mesh, controls, config
 

@@ -16,7 +16,7 @@ import numpy as np
 
 from jaxcontact._types import Array, Surface
 
-# The cutting scene's tool (SCENES.md): clearance angle, face length, edge
+# The cutting scene's tool (docs/scenes.md): clearance angle, face length, edge
 # radius, tip height (depth of cut 1 in a workpiece 5 high), arc segments.
 CLEARANCE = math.radians(7)
 FACE = 3.0

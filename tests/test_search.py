@@ -1,0 +1,237 @@
+"""``Search``: at every step of a moving, deforming scene, what ``all_to_all`` and ``swept`` return.
+
+One scene shape (the cutting scene at 2,000 nodes, its tool moving in -x into
+the workpiece while the workpiece deforms) serves every test, so that the
+compiled programs are shared.
+"""
+
+import dataclasses
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from jaxcontact import Search, SearchState, Sizes, Surface, all_to_all, bucket_sort, swept
+from jaxcontact.scenes import cutting_scene
+from tests.helpers import assert_same_contact, assert_same_crossing
+
+RADIUS, SKIN = 0.1, 0.05
+TOOL_STEP = 0.02  # the tool's travel per step; with the workpiece's motion, about half the skin
+NUM_STEPS = 12
+
+
+def trajectory(dtype, steps=NUM_STEPS, x_tip=20.25, tool_step=TOOL_STEP):
+    """Slaves and tool at each step: the tool starts clear of the workpiece and
+    moves in; the workpiece bends a little more each step. f[T, N, 2], f[T, P, 2]."""
+    scene = cutting_scene(2_000, x_tip, dtype=dtype)
+    x0 = np.asarray(scene.x, np.float64)
+    wave = np.stack([np.sin(3 * x0[:, 1]), np.cos(2 * x0[:, 0])], axis=-1)
+    k = np.arange(steps)[:, None, None]
+    xs = x0[None] + 0.004 * k * wave[None]
+    nodes = np.asarray(scene.surface.nodes, np.float64)[None] - tool_step * k * np.array([1.0, 0])
+    return jnp.asarray(xs, dtype), jnp.asarray(nodes, dtype), scene.surface.segments
+
+
+def surface_at(nodes, segments):
+    return Surface(nodes, segments)
+
+
+@pytest.mark.parametrize("method", ["auto", "binned"])
+def test_closest_equals_all_to_all_at_every_step_and_outgrown_sizes_say_so(method):
+    xs, nodes, segments = trajectory(jnp.float32)
+    # Sizes measured with the tool clear of the workpiece and no slack: the
+    # tool moving in outgrows them.
+    search = Search(radius=RADIUS, skin=SKIN, method=method, slack=1.0)
+    state = search.allocate(xs[0], surface_at(nodes[0], segments))
+    assert state.sizes.use_cells == (method == "binned")
+    step = jax.jit(search.closest)
+    overflows = 0
+    for x, at in zip(xs, nodes, strict=True):
+        surface = surface_at(at, segments)
+        contact, next_state = step(state, x, surface)
+        if contact.overflow:
+            overflows += 1
+            assert bool(next_state.overflow)  # the state keeps the flag
+            state = search.allocate(x, surface, at_least=state)
+            assert not bool(state.overflow)
+            contact, next_state = step(state, x, surface)
+        assert_same_contact(contact, all_to_all(x, surface, radius=RADIUS), RADIUS)
+        state = next_state
+    assert overflows >= 1
+    assert 0 < int(state.rebuilds) < NUM_STEPS  # candidates found again, and reused
+    assert not bool(state.overflow)
+
+
+def test_closest_in_a_scan_under_jit_equals_all_to_all_at_every_step():
+    xs, nodes, segments = trajectory(jnp.float64)
+    search = Search(radius=RADIUS, skin=SKIN)
+    # Sized ahead of need for the whole run: the last step, then the first.
+    last = search.allocate(xs[-1], surface_at(nodes[-1], segments))
+    state = search.allocate(xs[0], surface_at(nodes[0], segments), at_least=last)
+    assert state.sizes.block_capacity >= last.sizes.block_capacity
+
+    def body(state, step):
+        x, at = step
+        contact, state = search.closest(state, x, surface_at(at, segments))
+        return state, contact
+
+    state, contacts = jax.jit(lambda state: jax.lax.scan(body, state, (xs, nodes)))(state)
+    assert not bool(state.overflow)
+    assert 0 < int(state.rebuilds) < NUM_STEPS
+    dense = jax.vmap(lambda x, at: all_to_all(x, surface_at(at, segments), radius=RADIUS))
+    expected = dense(xs, nodes)
+    assert int(expected.found.sum()) > 0
+    for k in range(NUM_STEPS):
+        step = jax.tree.map(lambda field, k=k: field[k], (contacts, expected))
+        assert_same_contact(*step, RADIUS)
+
+
+def test_swept_equals_swept_at_every_step_and_outgrown_sizes_say_so():
+    xs, nodes, segments = trajectory(jnp.float32, x_tip=20.05, tool_step=0.05)
+    # Paths as the tool sees them: each node comes from a tool step behind.
+    search = Search(radius=RADIUS, skin=SKIN, slack=1.0)
+    x_prev = xs.at[..., 0].add(-0.05)
+    state = search.allocate(xs[0], surface_at(nodes[0], segments), x_prev=x_prev[0])
+    step = jax.jit(search.swept)
+    overflows = crossed = 0
+    for before, x, at in zip(x_prev, xs, nodes, strict=True):
+        surface = surface_at(at, segments)
+        crossing, next_state = step(state, before, x, surface)
+        if crossing.overflow:
+            overflows += 1
+            state = search.allocate(x, surface, x_prev=before, at_least=state)
+            crossing, next_state = step(state, before, x, surface)
+        expected = swept(before, x, surface)
+        assert_same_crossing(crossing, expected)
+        crossed += int(expected.crossed.sum())
+        state = next_state
+    assert overflows >= 1 and crossed > 0
+
+
+def test_closest_under_vmap_one_allocation_for_the_batch():
+    xs, nodes, segments = trajectory(jnp.float32, steps=3, x_tip=19.0)
+    surfaces = Surface(nodes, jnp.broadcast_to(segments, (3,) + segments.shape))
+    search = Search(radius=RADIUS, skin=SKIN)
+    state = search.allocate(xs, surfaces)
+    assert state.overflow.shape == (3,)
+    step = jax.jit(jax.vmap(search.closest))
+    dense = jax.vmap(lambda x, s: all_to_all(x, s, radius=RADIUS))
+    for shift in (0.0, 0.03, 0.2):  # reused, reused, found again
+        moved = xs.at[..., 0].add(shift)
+        contacts, state = step(state, moved, surfaces)
+        expected = dense(moved, surfaces)
+        for b in range(3):
+            one = jax.tree.map(lambda field, b=b: field[b], (contacts, expected))
+            assert_same_contact(*one, RADIUS)
+    np.testing.assert_array_equal(state.rebuilds, [1, 1, 1])
+
+
+def test_gradients_equal_all_to_all():
+    xs, nodes, segments = trajectory(jnp.float64, steps=4, x_tip=19.0)
+    search = Search(radius=RADIUS, skin=SKIN)
+    state = search.allocate(xs[0], surface_at(nodes[0], segments))
+
+    def objective(detect):
+        def total(x, at):
+            contact = detect(x, surface_at(at, segments))
+            return jnp.sum(contact.gap**2) + jnp.sum(contact.point * contact.normal)
+
+        return jax.jit(jax.grad(total, argnums=(0, 1)))
+
+    searched = objective(lambda x, s: search.closest(state, x, s)[0])
+    dense = objective(lambda x, s: all_to_all(x, s, radius=RADIUS))
+    for k in (0, 3):  # candidates reused, then found again inside the gradient
+        got, want = searched(xs[k], nodes[k]), dense(xs[k], nodes[k])
+        assert float(jnp.abs(want[0]).sum()) > 0
+        for g, w in zip(got, want, strict=True):
+            assert bool(jnp.all(jnp.isfinite(g)))
+            np.testing.assert_allclose(g, w, atol=1e-12)
+
+
+def test_stale_candidates_are_found_again_never_used():
+    scene = cutting_scene(2_000, 18.0)
+    search = Search(radius=RADIUS, skin=SKIN)
+    step = jax.jit(search.closest, static_argnames=())
+
+    def check(state, x, surface, mask=None, *, rebuilt):
+        contact, after = step(state, x, surface, mask=mask)
+        assert int(after.rebuilds) == int(state.rebuilds) + rebuilt
+        assert_same_contact(contact, all_to_all(x, surface, radius=RADIUS, mask=mask), RADIUS)
+        return after
+
+    state = search.allocate(scene.x, scene.surface)
+    # The skin rule: slaves and tool together moved less, then more, than the skin.
+    check(state, scene.x.at[:, 0].add(0.03), scene.surface, rebuilt=0)
+    tool = scene.surface._replace(nodes=scene.surface.nodes.at[:, 0].add(-0.03))
+    check(state, scene.x.at[:, 0].add(0.03), tool, rebuilt=1)
+    # Rows masked (or NaN) when found, real now: never looked at, so found again.
+    near = np.asarray(all_to_all(scene.x, scene.surface, radius=RADIUS).found)
+    hidden = search.allocate(scene.x, scene.surface, mask=jnp.asarray(~near))
+    check(hidden, scene.x, scene.surface, rebuilt=1)
+    check(hidden, scene.x, scene.surface, mask=jnp.asarray(~near), rebuilt=0)
+    nan = scene.x.at[np.flatnonzero(near)].set(jnp.nan)
+    check(search.allocate(nan, scene.surface), scene.x, scene.surface, rebuilt=1)
+    # A segment joined to other nodes (same node count): found again.
+    rejoined = scene.surface._replace(segments=jnp.roll(scene.surface.segments, 1, axis=0))
+    check(state, scene.x, rejoined, rebuilt=1)
+
+
+def test_exhaustive_method_is_all_to_all_and_swept_without_sizes():
+    scene = cutting_scene(2_000, 18.0, x_tip_prev=18.2)
+    search = Search(radius=RADIUS, method="exhaustive")
+    state = search.allocate(scene.x, scene.surface, x_prev=scene.x_prev)
+    assert state.sizes is None and state.path_sizes is None
+    contact, _ = search.closest(state, scene.x, scene.surface)
+    expected = all_to_all(scene.x, scene.surface, radius=RADIUS)
+    for field, value in zip(expected._fields, expected, strict=True):
+        np.testing.assert_array_equal(getattr(contact, field), value, err_msg=field)
+    crossing, _ = search.swept(state, scene.x_prev, scene.x, scene.surface)
+    np.testing.assert_array_equal(crossing.t, swept(scene.x_prev, scene.x, scene.surface).t)
+
+
+def test_state_is_a_pytree_with_static_sizes():
+    scene = cutting_scene(2_000, 18.0)
+    search = Search(radius=RADIUS, skin=SKIN)
+    state = search.allocate(scene.x, scene.surface)
+    leaves, tree = jax.tree.flatten(state)
+    rebuilt = jax.tree.unflatten(tree, leaves)
+    assert isinstance(rebuilt, SearchState) and rebuilt.sizes == state.sizes
+    assert isinstance(state.sizes, Sizes) and hash(state.sizes) == hash(dataclasses.replace(state.sizes))
+    assert not any(isinstance(leaf, Sizes) for leaf in leaves)
+    assert hash(search) == hash(Search(radius=RADIUS, skin=SKIN))
+
+
+@pytest.mark.parametrize(
+    "settings, message",
+    [
+        ({"radius": -1.0}, "radius must be finite and >= 0"),
+        ({"radius": 0.1, "skin": float("nan")}, "skin must be finite"),
+        ({"radius": 0.1, "method": "fast"}, "method must be one of"),
+        ({"radius": 0.1, "slack": 0.5}, "slack must be >= 1"),
+        ({"radius": 0.1, "block_size": 0}, "block_size must be an int >= 1"),
+    ],
+)
+def test_bad_settings_raise_naming_the_setting(settings, message):
+    with pytest.raises(ValueError, match=message):
+        Search(**settings)
+
+
+def test_misuse_raises_a_clear_error():
+    scene = cutting_scene(2_000, 18.0, x_tip_prev=18.2)
+    search = Search(radius=RADIUS, skin=SKIN)
+    state = search.allocate(scene.x, scene.surface)
+    with pytest.raises(ValueError, match="sizes were made for 2002 slaves; x has 1000 rows"):
+        search.closest(state, scene.x[:1000], scene.surface)
+    with pytest.raises(ValueError, match="allocate it with x_prev="):
+        search.swept(state, scene.x_prev, scene.x, scene.surface)
+    with pytest.raises(ValueError, match="x must have shape"):
+        search.closest(state, scene.x[:, :1], scene.surface)
+    with pytest.raises(ValueError, match="concrete data"):
+        jax.jit(lambda x: search.allocate(x, scene.surface))(scene.x)
+    with pytest.raises(ValueError, match="concrete data.*Search"):
+        jax.jit(lambda x: bucket_sort(x, scene.surface, radius=RADIUS))(scene.x)
+    with pytest.raises(ValueError, match="x_prev= for a Search without a radius"):
+        Search().allocate(scene.x, scene.surface)
+    with pytest.raises(ValueError, match="searches paths only"):
+        Search().closest(state, scene.x, scene.surface)
