@@ -1,13 +1,24 @@
 """The float64 reference every benchmark checks its answers against.
 
-A NumPy brute force in float64 with the library's rules (API.md): the
-closest real segment, and of exactly equal distances (a vertex shared by two
-segments) the one the slave is outside of, that is the larger signed normal
-distance ``(x - p) . n``, then the lower index. Slaves are taken in chunks
-sorted by x, and each chunk is projected only on the segments whose box comes
-within the radius of the chunk's box, so the rough die at 10^6 x 10^5 stays
-affordable while every pair that could matter is still evaluated exactly as
-the dense brute force would.
+A NumPy brute force in float64: the closest segment of non-zero length and,
+of segments at exactly equal float64 distance (any of them, whether or not
+they share a vertex), the one with the larger signed normal distance
+``(x - p) . n``, then the lower index. The gap is ``+-|x - p|`` with the sign
+of the chosen segment's ``(x - p) . n`` (zero counts as positive).
+
+That is the library's vertex-tie rule at a convex corner only
+(docs/contract.md, "Ties"). The library gives a tie at a concave corner to
+the smaller normal distance, with the gap's sign from exact sign tests
+(inside when inside either face), and a tie away from a shared vertex, or
+between segments that do not share the node index, to the lower index. Where
+the two differ the segments are at the same distance, so ``compare`` counts
+the library's answer as a tie, not an error: on the rough die, whose troughs
+are concave corners, the library's own rows show such ties.
+
+Slaves are taken in chunks sorted by x, and each chunk is projected only on
+the segments whose box comes within the radius of the chunk's box, so the
+rough die at 10^6 x 10^5 stays affordable while every pair that could matter
+is still evaluated exactly as the dense brute force would.
 
 The inputs are converted to float64 as given: the reference of a float32
 scene is the float64 answer for the very same float32 numbers.
@@ -63,7 +74,7 @@ def _project(x, start, end):
 
 def _endpoints(x, start, end):
     x, start, end = (np.asarray(a, np.float64).reshape(-1, 2) for a in (x, start, end))
-    real = np.any(start != end, axis=1)  # zero-length segments are ignored (API.md)
+    real = np.any(start != end, axis=1)  # zero-length segments are ignored (docs/contract.md)
     return x, start, end, real
 
 
@@ -101,8 +112,9 @@ def reference_contact(x, start, end, radius, *, chunk: int = 2048) -> Reference:
             continue
         distance_squared, normal = _project(x[rows, None], start[near][None], end[near][None])
         nearest = distance_squared.min(axis=1, keepdims=True)
-        # Of exactly equal distances, the larger signed normal distance, then the
-        # lower index (argmax returns the first of equal maxima; near is ascending).
+        # Of exactly equal distances (at a vertex or not, convex or concave), the
+        # larger signed normal distance, then the lower index (argmax returns the
+        # first of equal maxima; near is ascending).
         best = np.argmax(np.where(distance_squared == nearest, normal, -np.inf), axis=1)
         within = nearest[:, 0] <= radius * radius
         taken = np.arange(len(rows))
@@ -133,8 +145,10 @@ def compare(segment, gap, found, x, start, end, reference: Reference) -> Mismatc
     """Counts how ``(segment, gap, found)`` differs from ``reference`` on the same scene.
 
     A segment other than the reference's at exactly the reference's float64
-    distance is a tie (a shared vertex: the library's rule picks one, a peer
-    may pick the other); its gap is compared with that segment's own.
+    distance is a tie (a shared vertex, or two segments equally near: a peer
+    may pick either, and at a concave corner the library's rule picks the
+    face this reference does not); its gap is compared with that segment's
+    own, signed by its own ``(x - p) . n``.
 
     Example:
       >>> x, start, end = [[0.5, -0.1]], [[0.0, 0.0]], [[1.0, 0.0]]
