@@ -166,7 +166,7 @@ def _contact(x, surface, radius, mask, sizes: Sizes, candidates: Candidates | No
 
 
 def _crossing(x_prev, x, surface, mask, sizes: Sizes):
-    slave_ok = _inputs.rows_ok(x, _inputs.rows_ok(x_prev, mask))
+    slave_ok = _inputs.paths_ok(x_prev, x, mask)
     segments = _inputs.resolve_segments(surface)
     if x.shape[0] == 0 or segments.ok.shape[0] == 0:
         return empty_crossing(x, jnp.zeros((), bool))

@@ -123,7 +123,7 @@ def swept(x_prev: Array, x: Array, surface: Surface, *, mask: Array | None = Non
 
 @jax.jit
 def _swept(x_prev, x, surface, mask):
-    x_prev, x, slave_ok = _inputs.check_paths(x_prev, x, mask)
+    x_prev, x, slave_ok = _inputs.sanitize_paths(x_prev, x, mask)
     segments = _inputs.resolve_segments(surface)
 
     def assemble(choice):

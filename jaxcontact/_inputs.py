@@ -173,13 +173,12 @@ def check_path_inputs(x_prev, x, mask):
     return x_prev, x, check_mask("mask", mask, x.shape[0])
 
 
+def paths_ok(x_prev: Array, x: Array, mask: Array | None) -> Array:
+    """bool[N]: both ends of the path are finite and the row is not masked out."""
+    return rows_ok(x, rows_ok(x_prev, mask))
+
+
 def sanitize_paths(x_prev: Array, x: Array, mask: Array | None) -> tuple[Array, Array, Array]:
-    """Returns both positions with bad rows zeroed and bool[N] row ok (both ends finite)."""
-    _, prev_ok = sanitize_points(x_prev, mask)
-    x, ok = sanitize_points(x, prev_ok)
-    return jnp.where(ok[:, None], x_prev, 0), x, ok
-
-
-def check_paths(x_prev, x, mask) -> tuple[Array, Array, Array]:
-    """Checks a pair of slave positions; returns both sanitised and bool[N] row ok."""
-    return sanitize_paths(*check_path_inputs(x_prev, x, mask))
+    """Returns both positions with bad rows zeroed and bool[N] row ok (``paths_ok``)."""
+    ok = paths_ok(x_prev, x, mask)
+    return jnp.where(ok[:, None], x_prev, 0), jnp.where(ok[:, None], x, 0), ok
