@@ -75,19 +75,24 @@ def expired(candidates: Candidates, x, surface: Surface, mask, skin) -> Array:
     """bool[]: ``candidates`` may miss a pair now within the radius.
 
     A pair within the radius now was within ``radius + skin`` when they were
-    found if the largest slave move plus the largest master node move is at
-    most the skin (a segment moves no farther than its ends). Rows or
-    segments that became real since, and segments joined to other nodes,
-    were never looked at: they expire the candidates too.
+    found if the largest slave move plus the largest move of a real
+    segment's end is at most the skin (a segment moves no farther than its
+    ends). Rows or segments that became real since, and segments joined to
+    other nodes, were never looked at: they expire the candidates too. Rows
+    and segments that are not real (padding) may change freely.
     """
 
-    def largest_move(now, then):
-        step = jnp.sum((now - then) ** 2, axis=-1)
-        return jnp.sqrt(jnp.max(jnp.where(jnp.isfinite(step), step, 0), initial=0))
+    def largest(squared, ok):
+        return jnp.sqrt(jnp.max(jnp.where(ok & jnp.isfinite(squared), squared, 0), initial=0))
 
+    row_ok = _inputs.rows_ok(x, mask)
     segments = _inputs.resolve_segments(surface)
-    moved = largest_move(x, candidates.reference) + largest_move(surface.nodes, candidates.nodes)
-    new_rows = jnp.any(_inputs.rows_ok(x, mask) & ~candidates.row_ok)
+    ends_then = candidates.nodes[jnp.clip(segments.indices, 0, surface.nodes.shape[0] - 1)]
+    ends_now = jnp.stack([segments.start, segments.end], axis=1)
+    end_moves = jnp.max(jnp.sum((ends_now - ends_then) ** 2, axis=-1), axis=-1)
+    rows_moved = largest(jnp.sum((x - candidates.reference) ** 2, axis=-1), row_ok)
+    moved = rows_moved + largest(end_moves, segments.ok)
+    new_rows = jnp.any(row_ok & ~candidates.row_ok)
     new_segments = jnp.any(segments.ok & ~candidates.segment_ok)
     rejoined = jnp.any(segments.ok & jnp.any(segments.indices != candidates.indices, axis=-1))
     return (moved > skin) | new_rows | new_segments | rejoined

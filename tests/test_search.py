@@ -175,6 +175,16 @@ def test_stale_candidates_are_found_again_never_used():
     # A segment joined to other nodes (same node count): found again.
     rejoined = scene.surface._replace(segments=jnp.roll(scene.surface.segments, 1, axis=0))
     check(state, scene.x, rejoined, rebuilt=1)
+    # Padding may hold anything and change at every step: masked rows moving
+    # far and a masked segment joined to other nodes do not expire the candidates.
+    rows = np.arange(scene.x.shape[0]) % 5 == 0
+    mask = jnp.asarray(~rows)
+    masked = scene.surface._replace(mask=jnp.arange(20) != 7)
+    padded = search.allocate(scene.x, masked, mask=mask)
+    for garbage, ends in ((5.0, [0, 0]), (-40.0, [3, 12]), (jnp.nan, [19, 2])):
+        x = jnp.where(jnp.asarray(rows)[:, None], garbage, scene.x)
+        segments = masked.segments.at[7].set(jnp.asarray(ends, jnp.int32))
+        padded = check(padded, x, masked._replace(segments=segments), mask, rebuilt=0)
 
 
 def test_exhaustive_method_is_all_to_all_and_swept_without_sizes():
@@ -197,7 +207,9 @@ def test_state_is_a_pytree_with_static_sizes():
     leaves, tree = jax.tree.flatten(state)
     rebuilt = jax.tree.unflatten(tree, leaves)
     assert isinstance(rebuilt, SearchState) and rebuilt.sizes == state.sizes
-    assert isinstance(state.sizes, Sizes) and hash(state.sizes) == hash(dataclasses.replace(state.sizes))
+    assert isinstance(state.sizes, Sizes) and hash(state.sizes) == hash(
+        dataclasses.replace(state.sizes)
+    )
     assert not any(isinstance(leaf, Sizes) for leaf in leaves)
     assert hash(search) == hash(Search(radius=RADIUS, skin=SKIN))
 
