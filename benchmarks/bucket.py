@@ -4,6 +4,10 @@ Every figure is measured in one process, the baselines beside the library on
 the same inputs: float32, jit, compile time apart, median and 10-90 percentile
 spread of repeated runs ended by ``block_until_ready``. Each answer is checked
 against ``all_to_all`` (or ``swept``) in float64 and its mismatches reported.
+"bucket_sort (sized)" and "bucket_swept (sized)" are the bucket sorts with
+their ``Sizes`` measured outside the timer (``jaxcontact._sizes.measure``)
+and the whole search, broad phase included, inside it; the one-call
+``bucket_sort`` would measure them again at every call.
 
     python benchmarks/bucket.py               # all sections, a few minutes
     taskset -c 0 python benchmarks/bucket.py  # pinned to one core
@@ -12,7 +16,9 @@ against ``all_to_all`` (or ``swept``) in float64 and its mismatches reported.
 Sections: the cutting scene with the tool in the workpiece and clear of it
 (with block sizes and narrow phases compared), the rough-die scene (cell
 sizes compared; peak memory from XLA's own buffer accounting), the paper's
-Tests 1 and 2 at 82,369 nodes, and reuse of candidates with a skin.
+Tests 1 and 2 at 82,369 nodes, and reuse of candidates with a skin (the
+internal sized search given candidates, and the public ``Search.closest``
+with a reused state).
 """
 
 from __future__ import annotations
@@ -24,20 +30,15 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxcontact import (
-    all_to_all,
-    bucket_sort,
-    bucket_swept,
-    find_candidates,
-    plan_buckets,
-    swept,
-)
-from jaxcontact.bench.timing import pinned_note, time_call
+from jaxcontact import Search, _bucket, all_to_all, swept
+from jaxcontact._sizes import measure
+from jaxcontact.bench._run import sized_contact, sized_crossing
 from jaxcontact.bench.baselines import (
     kdtree_pairs_project,
     kdtree_project,
     numpy_box_then_dense,
 )
+from jaxcontact.bench.timing import pinned_note, time_call
 from jaxcontact.scenes import cutting_scene, paper_scene, rough_die_scene
 
 ROWS: list[tuple] = []
@@ -128,8 +129,8 @@ def endpoints(surface):
     return nodes[segments[:, 0]], nodes[segments[:, 1]]
 
 
-def time_bucket(scene, radius, plan, repeats):
-    detect = jax.jit(functools.partial(bucket_sort, radius=radius, plan=plan))
+def time_bucket(scene, radius, sizes, repeats):
+    detect = sized_contact(radius, sizes)
     timing = time_call(detect, scene.x, scene.surface, repeats=repeats)
     result = detect(scene.x, scene.surface)
     return timing, result
@@ -174,15 +175,15 @@ def cutting_section(num_nodes, repeats, quick):
         block_sizes = (64,) if quick else (32, 64, 128, 256)
         for block_size in block_sizes:
             for use_cells in (False, True) if block_size == 64 else (False,):
-                plan = plan_buckets(
+                sizes = measure(
                     scene.x,
                     scene.surface,
                     radius=radius,
                     block_size=block_size,
                     use_cells=use_cells,
                 )
-                timing, result = time_bucket(scene, radius, plan, repeats)
-                method = f"bucket_sort block={block_size}" + (" cells" if use_cells else "")
+                timing, result = time_bucket(scene, radius, sizes, repeats)
+                method = f"bucket_sort (sized) block={block_size}" + (" cells" if use_cells else "")
                 report(
                     section,
                     method,
@@ -220,22 +221,22 @@ def rough_die_section(sizes, repeats):
             # Ratios are against the faster of the two.
             kd_ms = min(kd_ms or np.inf, kd_timing.median_s * 1e3)
         for cell_factor in (0.5, 1.0, 2.0):
-            plan = plan_buckets(scene.x, scene.surface, radius=radius, cell_factor=cell_factor)
-            detect = jax.jit(functools.partial(bucket_sort, radius=radius, plan=plan))
+            sizes = measure(scene.x, scene.surface, radius=radius, cell_factor=cell_factor)
+            detect = sized_contact(radius, sizes)
             compiled = detect.lower(scene.x, scene.surface).compile()
             memory = compiled.memory_analysis()
             peak = memory.temp_size_in_bytes + memory.output_size_in_bytes
-            timing, result = time_bucket(scene, radius, plan, repeats)
+            timing, result = time_bucket(scene, radius, sizes, repeats)
             if reference is None:
                 check = differ_from_kdtree(x, start, end, np.asarray(result.segment), kd[0])
             else:
                 check = mismatches((result.segment, result.found), reference)
             check += f"; overflow={bool(result.overflow)}; XLA temp+out {peak / 2**20:.0f} MiB"
-            cells = f"{plan.grid_shape[0]}x{plan.grid_shape[1]}"
-            check += f"; {cells} cells, capacity {plan.cell_capacity}"
+            cells = f"{sizes.grid_shape[0]}x{sizes.grid_shape[1]}"
+            check += f"; {cells} cells, capacity {sizes.cell_capacity}"
             report(
                 section,
-                f"bucket_sort cells x{cell_factor}",
+                f"bucket_sort (sized) cells x{cell_factor}",
                 num_nodes,
                 num_segments,
                 timing,
@@ -268,48 +269,62 @@ def paper_section(n, repeats):
         timing = time_call(dense, scene.x, scene.surface, repeats=repeats)
         dense_ms = timing.median_s * 1e3
         report(section, "all_to_all", nodes, 2, timing, timing.compile_s, "")
-        plan = plan_buckets(scene.x, scene.surface, radius=radius)
-        timing, result = time_bucket(scene, radius, plan, repeats)
+        sizes = measure(scene.x, scene.surface, radius=radius)
+        timing, result = time_bucket(scene, radius, sizes, repeats)
         reference = dense(scene.x, scene.surface)
         check = mismatches((result.segment, result.found), reference)
-        report(section, "bucket_sort", nodes, 2, timing, timing.compile_s, check, dense_ms)
+        method = "bucket_sort (sized)"
+        report(section, method, nodes, 2, timing, timing.compile_s, check, dense_ms)
         crossing = jax.jit(swept)
         timing = time_call(crossing, scene.x_prev, scene.x, scene.surface, repeats=repeats)
         swept_ms = timing.median_s * 1e3
         reference = crossing(scene.x_prev, scene.x, scene.surface)
         crossed = f"{int(reference.crossed.sum())} crossed"
         report(section, "swept", nodes, 2, timing, timing.compile_s, crossed)
-        plan = plan_buckets(scene.x, scene.surface, x_prev=scene.x_prev)
-        binned = jax.jit(functools.partial(bucket_swept, plan=plan))
+        binned = sized_crossing(measure(scene.x, scene.surface, x_prev=scene.x_prev))
         timing = time_call(binned, scene.x_prev, scene.x, scene.surface, repeats=repeats)
         result = binned(scene.x_prev, scene.x, scene.surface)
         wrong = int((np.asarray(result.segment) != np.asarray(reference.segment)).sum())
         check = f"{wrong} rows differ"
-        report(section, "bucket_swept", nodes, 2, timing, timing.compile_s, check, swept_ms)
+        method = "bucket_swept (sized)"
+        report(section, method, nodes, 2, timing, timing.compile_s, check, swept_ms)
 
 
 def reuse_section(num_nodes, repeats):
     scene = cutting_scene(num_nodes, 18.0)
     radius, skin = scene.radius, scene.radius / 2
     section = "cutting x_tip=18, reuse"
-    plan = plan_buckets(scene.x, scene.surface, radius=radius + skin)
-    fresh, _ = time_bucket(scene, radius, plan, repeats)
-    report(section, "bucket_sort, fresh search", num_nodes, 20, fresh, fresh.compile_s, "")
-    near = find_candidates(scene.x, scene.surface, radius=radius, skin=skin, plan=plan)
-    detect = jax.jit(functools.partial(bucket_sort, radius=radius, plan=plan))
-    timing = time_call(
-        lambda x, s, c: detect(x, s, candidates=c), scene.x, scene.surface, near, repeats=repeats
-    )
-    report(
-        section,
-        "bucket_sort, reused candidates",
-        num_nodes,
-        20,
-        timing,
-        None,
-        "",
-        fresh.median_s * 1e3,
-    )
+    reference = reference_contact(scene, radius)
+    # Sized at radius + skin, as the candidates are; the fresh search (its
+    # broad phase at the radius) runs with the same sizes.
+    sizes = measure(scene.x, scene.surface, radius=radius + skin)
+    fresh, result = time_bucket(scene, radius, sizes, repeats)
+    check = mismatches((result.segment, result.found), reference)
+    method = "bucket_sort (sized at radius + skin), fresh search"
+    report(section, method, num_nodes, 20, fresh, fresh.compile_s, check)
+    reach = jnp.asarray(radius + skin, scene.x.dtype)
+    near = _bucket.find_jit(scene.x, scene.surface, reach, None, sizes=sizes)
+
+    @jax.jit
+    def reused(x, surface, candidates):
+        r = jnp.asarray(radius, x.dtype)
+        return _bucket.contact_jit(x, surface, r, None, sizes=sizes, candidates=candidates)
+
+    timing = time_call(reused, scene.x, scene.surface, near, repeats=repeats)
+    result = reused(scene.x, scene.surface, near)
+    check = mismatches((result.segment, result.found), reference)
+    method = "bucket_sort (sized), reused candidates"
+    report(section, method, num_nodes, 20, timing, timing.compile_s, check, fresh.median_s * 1e3)
+    # The public form: the skin rule checked, the candidates kept (no re-find).
+    search = Search(radius=radius, skin=skin)
+    state = search.allocate(scene.x, scene.surface)
+    step = jax.jit(search.closest)
+    timing = time_call(step, state, scene.x, scene.surface, repeats=repeats)
+    result, after = step(state, scene.x, scene.surface)
+    check = mismatches((result.segment, result.found), reference)
+    check += f"; rebuilds {int(after.rebuilds)}"
+    method = "Search.closest (reused state)"
+    report(section, method, num_nodes, 20, timing, timing.compile_s, check, fresh.median_s * 1e3)
 
 
 def main():

@@ -1,6 +1,6 @@
 """Benchmark of the dense detectors, ``all_to_all`` and ``swept``, against naive baselines.
 
-Scenes (SCENES.md): the paper scene, Test 1 (face length 10, d = 5) at
+Scenes (docs/scenes.md): the paper scene, Test 1 (face length 10, d = 5) at
 n = 250 (63,001 nodes) and n = 286 (82,369 nodes), and the cutting scene at
 81,939 nodes with the tool tip at x = 18 (``all_to_all`` only: nothing moves).
 All in float32, on the CPU.
@@ -37,9 +37,9 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxcontact import all_to_all, swept
-from jaxcontact.bench.timing import pinned_note, time_call
 from jaxcontact.bench.baselines import brute_crossing
 from jaxcontact.bench.baselines import dense_closest as brute_closest
+from jaxcontact.bench.timing import pinned_note, time_call
 from jaxcontact.scenes import cutting_scene, paper_scene
 
 

@@ -53,6 +53,9 @@ SECTIONS = {
     "time_vs_error": Section(
         "Time against error", "time_vs_error.py", ("--out", "{out}"), "{out}/time_vs_error.md"
     ),
+    "search_step": Section(
+        "Search step", "search_step.py", ("--out", "{out}"), "{out}/search_step.md"
+    ),
     "stability": Section("Stability", "stability.py", ("--out", "{out}")),
     "simulate": Section("Simulation", "simulate.py"),
 }

@@ -11,10 +11,19 @@ not a multiple of the device count), not a speed-up. Run it where the devices
 are real (several GPUs, or hosts with ``examples/multihost.py``) to see
 scaling; the script is the same.
 
+Devices: ``sharded(all_to_all)`` under ``jit``; ``bucket_sort (sized)``, the
+bucket sort under ``sharded`` and ``jit`` with one device's ``Sizes``
+measured outside the timer (as ``sharded(bucket_sort)`` measures them); and
+``sharded(bucket_sort)`` called plainly, as a user calls it, which measures
+those sizes on the host at every call (its "compile s" is its first call;
+timed by 3 calls, as each call currently compiles its ``shard_map`` anew).
+
 Batches: B cutting scenes (the tool at B positions) under ``jax.vmap`` with
-one plan from ``plan_batch`` (on the CPU the searches inside run scene by
-scene, the rest batched), against ``jax.lax.map`` over the whole detector and
-a Python loop of single calls, each scene with its own plan; time per scene.
+one ``Sizes`` for the batch (``jaxcontact._sizes.measure_batch``; on the CPU
+the searches inside run scene by scene, the rest batched), against
+``jax.lax.map`` over the whole detector and a Python loop of single calls,
+each scene with its own sizes; time per scene. The bucket sort rows are
+"(sized)": sizes measured outside the timer, the whole search inside.
 """
 
 from __future__ import annotations
@@ -34,15 +43,10 @@ def worker(devices: int, num_nodes: int, repeats: int, batches: list[int]) -> No
     import jax
     import jax.numpy as jnp
 
-    from jaxcontact import (
-        Surface,
-        all_to_all,
-        bucket_sort,
-        plan_batch,
-        plan_buckets,
-        plan_sharded,
-        sharded,
-    )
+    from jaxcontact import Surface, _bucket, all_to_all, bucket_sort, sharded
+    from jaxcontact._shard import _device_sizes, _pad_rows, shard_rows
+    from jaxcontact._sizes import measure, measure_batch
+    from jaxcontact.bench._run import sized_contact
     from jaxcontact.bench.timing import time_call
     from jaxcontact.scenes import cutting_scene
 
@@ -71,13 +75,33 @@ def worker(devices: int, num_nodes: int, repeats: int, batches: list[int]) -> No
         num_nodes,
         time_call(dense, scene.x, scene.surface, repeats=repeats),
     )
-    plan = plan_sharded(scene.x, scene.surface, devices, radius=radius)
-    binned = jax.jit(functools.partial(sharded(bucket_sort, mesh), radius=radius, plan=plan))
+    # One device's sizes, measured here as sharded(bucket_sort) measures them
+    # at each call: the rows padded to a multiple of the device count, split.
+    num_rows = scene.x.shape[0]
+    total = shard_rows(num_rows, devices) * devices
+    rows = _pad_rows(jnp.ones(num_rows, bool), total, False)
+    padded = _pad_rows(scene.x, total)
+    sizes = _device_sizes(bucket_sort, [padded], scene.surface, rows, devices, radius)
+
+    def on_device(x, surface, *, mask, radius):
+        r = jnp.asarray(radius, x.dtype)
+        return _bucket.contact_jit(x, surface, r, mask, sizes=sizes)
+
+    binned = jax.jit(functools.partial(sharded(on_device, mesh), radius=radius))
     emit(
         "devices",
-        "bucket_sort",
+        "bucket_sort (sized)",
         num_nodes,
         time_call(binned, scene.x, scene.surface, repeats=repeats),
+    )
+    # As a user calls it: a plain call that measures the sizes every time.
+    # Each call also compiles its shard_map anew (seconds), so 3 runs only.
+    measured = functools.partial(sharded(bucket_sort, mesh), radius=radius)
+    emit(
+        "devices",
+        "sharded(bucket_sort), plain call",
+        num_nodes,
+        time_call(measured, scene.x, scene.surface, repeats=min(repeats, 3), warmup=0),
     )
     if devices != 1:
         return
@@ -91,10 +115,9 @@ def worker(devices: int, num_nodes: int, repeats: int, batches: list[int]) -> No
             jnp.stack([s.surface.nodes for s in scenes]),
             jnp.stack([s.surface.segments for s in scenes]),
         )
-        for name in ("all_to_all", "bucket_sort"):
-            if name == "bucket_sort":
-                plan = plan_batch(x, surface, radius=radius)
-                one = functools.partial(bucket_sort, radius=radius, plan=plan)
+        for name in ("all_to_all", "bucket_sort (sized)"):
+            if name == "bucket_sort (sized)":
+                one = sized_contact(radius, measure_batch(x, surface, radius=radius))
             else:
                 one = functools.partial(all_to_all, radius=radius)
             mapped = jax.jit(jax.vmap(one))
@@ -109,12 +132,9 @@ def worker(devices: int, num_nodes: int, repeats: int, batches: list[int]) -> No
                 time_call(serial, x, surface, repeats=repeats),
                 size,
             )
-            if name == "bucket_sort":
+            if name == "bucket_sort (sized)":
                 own = [
-                    functools.partial(
-                        bucket_sort, radius=radius, plan=plan_buckets(s.x, s.surface, radius=radius)
-                    )
-                    for s in scenes
+                    sized_contact(radius, measure(s.x, s.surface, radius=radius)) for s in scenes
                 ]
             else:
                 own = [one] * size

@@ -4,13 +4,14 @@
     python benchmarks/simulate.py --quick    # 2,000 nodes, a smoke test
 
 Each row runs ``jaxcontact.sim`` as ``jaxcontact demo`` does
-(``jaxcontact.sim.demo.run_demo``): the set-up and plan on the host, one run
-to compile (replanning if the plan overflowed), then the whole ``lax.scan``
-timed ``--repeats`` times (median, 10th–90th percentile), float32, jit.
+(``jaxcontact.sim.demo.run_demo``): the set-up and the search's sizes on the
+host, one run to compile (allocating larger sizes if they overflowed), then
+the whole ``lax.scan`` timed ``--repeats`` times (median, 10th–90th
+percentile), float32, jit.
 
 Detection share: the same scan with detection replaced by a fixed contact
 result (``run(..., detect=False)``: the same elastic update and force
-assembly; no ``candidates_expired``, ``find_candidates`` or ``bucket_sort``)
+assembly; no ``Search.closest``: no skin check, no re-finding, no search)
 is timed too, and the share is ``1 - without / with``: what detection adds to
 a step inside the compiled loop. Slaves: the workpiece's free outline (the
 default) and, for comparison, every node (the cutting scene's slaves).
@@ -23,8 +24,8 @@ import argparse
 import jax
 import numpy as np
 
-from jaxcontact.sim.demo import run_demo
 from jaxcontact.bench.timing import pinned_note
+from jaxcontact.sim.demo import run_demo
 
 
 def main() -> None:
@@ -48,7 +49,7 @@ def main() -> None:
             summary, drawn = run_demo(nodes, travel, args.repeats, np.float32, slaves)
             config, timed, untimed = drawn[2], drawn[5], drawn[6]
             print(
-                f"| {summary.nodes:,} | {slaves} ({config.plan.num_slaves:,}) | {summary.steps} "
+                f"| {summary.nodes:,} | {slaves} ({config.sizes.num_slaves:,}) | {summary.steps} "
                 f"| {summary.steps_per_s:,.0f} | {timed.median_s:.3f} "
                 f"({timed.p10_s:.3f}-{timed.p90_s:.3f}) | {untimed.median_s:.3f} "
                 f"| {summary.detection_share:.1%} | {summary.rebuilds} | {summary.first_s:.1f} |",

@@ -50,24 +50,24 @@ def main() -> None:
 
     import jax.numpy as jnp
 
-    from jaxcontact import all_to_all, bucket_sort, contact_forces, plan_sharded, sharded
+    from jaxcontact import all_to_all, bucket_sort, contact_forces, sharded
     from jaxcontact.scenes import cutting_scene
 
     devices = jax.devices()
     mesh = jax.make_mesh((len(devices),), ("slaves",))
     scene = cutting_scene(args.nodes, x_tip=18.0)
-    # The bucket plan is made from concrete data on the host, for one device's rows.
-    plan = plan_sharded(scene.x, scene.surface, len(devices), radius=scene.radius)
+    # The bucket sort measures its sizes for one device's rows from the
+    # concrete data on the host, so it is called plainly, outside jit.
+    binned = sharded(bucket_sort, mesh)(scene.x, scene.surface, radius=scene.radius)
+    dense = jax.jit(sharded(all_to_all, mesh))(scene.x, scene.surface, radius=scene.radius)
 
     @jax.jit
-    def step(x, surface):
-        dense = sharded(all_to_all, mesh)(x, surface, radius=scene.radius)
-        binned = sharded(bucket_sort, mesh)(x, surface, radius=scene.radius, plan=plan)
+    def summary(binned, dense):
         _, on_tool = contact_forces(binned, 1e4)  # the sum over devices is a collective
         same = jnp.all((dense.segment == binned.segment) | ~dense.found)
         return jnp.sum(binned.found), jnp.sum(binned.active), on_tool, same, binned.overflow
 
-    found, active, on_tool, same, overflow = step(scene.x, scene.surface)
+    found, active, on_tool, same, overflow = summary(binned, dense)
     if jax.process_index() == 0:
         print(
             f"{jax.process_count()} process(es), {len(devices)} device(s): "

@@ -46,7 +46,8 @@ class SearchState:
       path_sizes: the swept search's capacities (``None`` unless allocated
         with ``x_prev``).
       candidates: what lies within ``radius + skin``, found at ``allocate``
-        or since, with the positions it was found at.
+        or since, with the positions it was found at (``None`` without a
+        skin).
       overflow: bool[] some search since ``allocate`` outgrew the sizes: a
         contact or crossing may have been missed. It stays True.
       rebuilds: i32[] how often the candidates were found again since
@@ -91,10 +92,14 @@ class Search:
     Attributes:
       radius: the closest-point search radius (``closest``); ``None`` for a
         search of paths only.
-      skin: candidates are found within ``radius + skin`` and reused until
-        the largest slave move plus the largest master node move since
-        exceeds it (or a row or segment becomes real, or a segment is joined
-        to other nodes). A larger skin finds more candidates less often.
+      skin: ``0`` (the default) keeps no candidates: every ``closest`` runs
+        the whole bucket sort with the allocated sizes. Above 0, candidates
+        are found within ``radius + skin`` and reused until the largest slave
+        move plus the largest move of a real segment's end since exceeds it
+        (or a row or segment becomes real, or a segment is joined to other
+        nodes). Reuse skips the broad phase and the binning but reads every
+        row to check the rule: it pays with many segments (cells), less or
+        not at all with a small tool (``benchmarks/search_step.py``).
       method: ``"binned"``: bucket sort with the segments binned in cells,
         each kept slave against its cell's segments; ``"dense"``: bucket
         sort with each kept slave against every segment; ``"auto"``:
@@ -178,9 +183,7 @@ class Search:
             if self.radius is not None:
                 sizes = measure(x, surface, radius=self._reach, mask=mask, **self._sizing)
                 sizes = self._merged(sizes, at_least, "sizes")
-                reach = jnp.asarray(self._reach, x.dtype)
-                candidates = _bucket.find_jit(x, surface, reach, mask, sizes=sizes)
-                overflow = candidates.overflow
+                candidates, overflow = self._find(x, surface, mask, sizes)
             if x_prev is not None:
                 path_sizes = measure(x, surface, x_prev=x_prev, mask=mask, **self._sizing)
                 path_sizes = self._merged(path_sizes, at_least, "path_sizes")
@@ -197,13 +200,11 @@ class Search:
             if self.radius is not None:
                 sizes = measure_batch(x, surface, radius=self._reach, mask=mask, **self._sizing)
                 sizes = self._merged(sizes, at_least, "sizes")
-                reach = jnp.asarray(self._reach, x.dtype)
 
                 def find(x, surface, mask):
-                    return _bucket.find_jit(x, surface, reach, mask, sizes=sizes)
+                    return self._find(x, surface, mask, sizes)
 
-                candidates = jax.vmap(find, in_axes=axes)(x, surface, mask)
-                overflow = candidates.overflow
+                candidates, overflow = jax.vmap(find, in_axes=axes)(x, surface, mask)
             if x_prev is not None:
                 path_sizes = measure_batch(x, surface, x_prev=x_prev, mask=mask, **self._sizing)
                 path_sizes = self._merged(path_sizes, at_least, "path_sizes")
@@ -231,10 +232,16 @@ class Search:
         candidates, overflow = None, jnp.zeros((), bool)
         if sizes is not None:
             _bucket.check_sizes(sizes, x.shape[0], for_paths=False)
-            reach = jnp.asarray(self._reach, x.dtype)
-            candidates = _bucket.find_jit(x, surface, reach, mask, sizes=sizes)
-            overflow = candidates.overflow
+            candidates, overflow = self._find(x, surface, mask, sizes)
         return SearchState(sizes, path_sizes, candidates, overflow, jnp.zeros((), jnp.int32))
+
+    def _find(self, x, surface, mask, sizes: Sizes):
+        """``(candidates or None, overflow)``: none are kept without a skin."""
+        if self.skin == 0:
+            return None, jnp.zeros((), bool)
+        reach = jnp.asarray(self._reach, x.dtype)
+        candidates = _bucket.find_jit(x, surface, reach, mask, sizes=sizes)
+        return candidates, candidates.overflow
 
     @property
     def _reach(self) -> float:
@@ -324,6 +331,9 @@ def _closest(search: Search, state: SearchState, x, surface, mask):
     sizes = state.sizes
     reach = jnp.asarray(search._reach, x.dtype)
     radius = jnp.asarray(search.radius, x.dtype)
+    if state.candidates is None:  # no skin: the whole bucket sort, every step
+        contact = _bucket.contact_jit(x, surface, radius, mask, sizes=sizes)
+        return contact, dataclasses.replace(state, overflow=state.overflow | contact.overflow)
     stale = _bucket.expired(state.candidates, x, surface, mask, search.skin)
 
     def find_again(x, surface, mask, _):

@@ -13,6 +13,9 @@ many (``jax.distributed.initialize`` first; see the README).
 
 from __future__ import annotations
 
+import dataclasses
+import functools
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -96,38 +99,17 @@ def sharded(detector, mesh: Mesh, *, axis: str | None = None):
         points = [_pad_rows(jnp.asarray(p), total) for p in points]
         rows = jnp.ones(num_rows, bool) if mask is None else jnp.asarray(mask)
         rows = _pad_rows(rows, total, False)
-        static = {k: v for k, v in kwargs.items() if v is None}
-        arrays = {k: v for k, v in kwargs.items() if k not in static}
+        static = tuple(sorted(k for k, v in kwargs.items() if v is None))
+        arrays = {k: v for k, v in kwargs.items() if v is not None}
         on_device = detector
         if detector is bucket_sort or detector is bucket_swept:
             on_device = _sized(detector, points, surface, rows, num_shards, arrays)
-
-        def on_one_device(surface, arrays, rows, *points):
-            return on_device(*points, surface, mask=rows, **arrays, **static)
-
-        def local(*args):
-            result = on_one_device(*args)
-            anywhere = jax.lax.psum(result.overflow.astype(jnp.int32), axis) > 0
-            return result._replace(overflow=anywhere)
-
-        per_device = total // num_shards
-        one_device = [jax.ShapeDtypeStruct((per_device,) + v.shape[1:], v.dtype) for v in points]
-        rows_shape = jax.ShapeDtypeStruct((per_device,), bool)
-        template = jax.eval_shape(on_one_device, surface, arrays, rows_shape, *one_device)
-        out_specs = jax.tree.map(lambda leaf: P() if leaf.ndim == 0 else P(axis), template)
-        mapped = jax.shard_map(
-            local,
-            mesh=mesh,
-            in_specs=(P(), P(), P(axis)) + (P(axis),) * len(points),
-            out_specs=out_specs,
-            # The detectors' conds return constants in their skip branches,
-            # which the varying-axes check would reject; each device's
-            # result is its own rows, and overflow is reduced above.
-            check_vma=False,
-        )
         split = NamedSharding(mesh, P(axis))
         rows, *points = (jax.reshard(v, split) for v in (rows, *points))
-        result = mapped(surface, arrays, rows, *points)
+        # Compiled once per detector, sizes, mesh and shapes: a plain call
+        # of ``run`` at the same shapes reuses it.
+        where = {"on_device": on_device, "mesh": mesh, "axis": axis, "none": static}
+        result = _split(surface, arrays, rows, *points, **where)
         if total == num_rows:
             return result
         # Uneven rows cannot stay split (JAX's explicit sharding refuses the
@@ -140,28 +122,65 @@ def sharded(detector, mesh: Mesh, *, axis: str | None = None):
     return run
 
 
-def _sized(detector, points, surface, rows, num_shards: int, arrays):
+@functools.partial(jax.jit, static_argnames=("on_device", "mesh", "axis", "none"))
+def _split(surface, arrays, rows, *points, on_device, mesh, axis, none):
+    """``on_device`` on each device's rows under ``jax.shard_map``; overflow OR-ed."""
+    static = dict.fromkeys(none)
+
+    def on_one_device(surface, arrays, rows, *points):
+        return on_device(*points, surface, mask=rows, **arrays, **static)
+
+    def local(*args):
+        result = on_one_device(*args)
+        anywhere = jax.lax.psum(result.overflow.astype(jnp.int32), axis) > 0
+        return result._replace(overflow=anywhere)
+
+    num_shards = mesh.shape[axis]
+    one_device = [
+        jax.ShapeDtypeStruct((v.shape[0] // num_shards,) + v.shape[1:], v.dtype)
+        for v in (rows, *points)
+    ]
+    template = jax.eval_shape(on_one_device, surface, arrays, *one_device)
+    out_specs = jax.tree.map(lambda leaf: P() if leaf.ndim == 0 else P(axis), template)
+    mapped = jax.shard_map(
+        local,
+        mesh=mesh,
+        in_specs=(P(), P(), P(axis)) + (P(axis),) * len(points),
+        out_specs=out_specs,
+        # The detectors' conds return constants in their skip branches,
+        # which the varying-axes check would reject; each device's
+        # result is its own rows, and overflow is reduced above.
+        check_vma=False,
+    )
+    return mapped(surface, arrays, rows, *points)
+
+
+@dataclasses.dataclass(frozen=True)
+class _Sized:
+    """A bucket detector with fixed sizes: hashable, so its program is cached."""
+
+    sizes: Sizes
+
+    def __call__(self, *points, mask, radius=None):
+        surface = points[-1]
+        if self.sizes.for_paths:
+            x_prev, x = points[:2]
+            return _bucket.crossing_jit(x_prev, x, surface, mask, sizes=self.sizes)
+        return _bucket.contact_jit(points[0], surface, radius, mask, sizes=self.sizes)
+
+
+def _sized(detector, points, surface, rows, num_shards: int, arrays) -> _Sized:
     """``detector`` on one device's rows with sizes measured for them on the host."""
-    name = detector.__name__
-    _bucket._concrete_only(f"sharded({name})", (points, surface, rows, arrays))
+    _bucket._concrete_only(f"sharded({detector.__name__})", (points, surface, rows, arrays))
     if detector is bucket_swept:
-        x_prev, x, _ = _inputs.check_path_inputs(points[0], points[1], None)
+        _, x, _ = _inputs.check_path_inputs(points[0], points[1], None)
         surface = _inputs.check_surface(surface, x.dtype)
-        sizes = _device_sizes(detector, points, surface, rows, num_shards, None)
-
-        def crossing(x_prev, x, surface, *, mask):
-            return _bucket.crossing_jit(x_prev, x, surface, mask, sizes=sizes)
-
-        return crossing
+        return _Sized(_device_sizes(detector, points, surface, rows, num_shards, None))
     x, surface, radius, _ = _inputs.check_contact_inputs(
         points[0], surface, arrays.get("radius"), None
     )
-    sizes = _device_sizes(detector, points, surface, rows, num_shards, radius)
-
-    def contact(x, surface, *, mask, radius):
-        return _bucket.contact_jit(x, surface, radius, mask, sizes=sizes)
-
-    return contact
+    arrays["radius"] = radius
+    return _Sized(_device_sizes(detector, points, surface, rows, num_shards, radius))
 
 
 def contact_forces(

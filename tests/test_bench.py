@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 from jaxcontact._cli import _parser
-from jaxcontact.bench.timing import time_interleaved
 from jaxcontact.bench import _run, baselines, oracle, peers
+from jaxcontact.bench.timing import time_interleaved
 from jaxcontact.scenes import cutting_scene, paper_scene, rough_die_scene
 from tests.oracle import oracle_contact
 
@@ -94,14 +94,14 @@ def test_peer_rows_and_csv(tmp_path, monkeypatch):
     monkeypatch.setattr(peers, "PAIR_BUDGET", 5_000)  # dense (19,840 pairs) skipped, box not
     rows = peers.run_scene("cutting, tool in (x_tip=18)", 1_000, 18.0, repeats=2, slow_s=60)
     by_method = {row["method"]: row for row in rows}
-    assert set(by_method) == {"all_to_all", "bucket_sort", "NumPy dense", "NumPy box-then-dense"}
+    assert set(by_method) == {"all_to_all", peers.LIBRARY, "NumPy dense", "NumPy box-then-dense"}
     assert by_method["NumPy dense"]["note"].startswith("skipped")
     assert by_method["NumPy dense"]["median_ms"] == ""
-    for method in ("all_to_all", "bucket_sort", "NumPy box-then-dense"):
+    for method in ("all_to_all", peers.LIBRARY, "NumPy box-then-dense"):
         row = by_method[method]
         assert row["median_ms"] > 0 and row["runs"] == 2
         assert row["missed"] == row["false"] == row["wrong_segment"] == 0, row
-    assert by_method["bucket_sort"]["ratio"] == "1.00"
+    assert by_method[peers.LIBRARY]["ratio"] == "1.00"
     _run.write(str(tmp_path), "peers", rows, "text")
     with open(tmp_path / "peers.csv") as stream:
         written = list(csv.DictReader(stream))
@@ -160,17 +160,20 @@ def test_results_assembles_stored_sections(tmp_path):
         assert "`benchmarks/stability.py` is not in this checkout." in text
 
 
-def test_a_plan_too_small_is_counted_as_missed_contacts():
-    from jaxcontact import bucket_sort, plan_buckets
+def test_sizes_too_small_are_counted_as_missed_contacts():
+    from jaxcontact._sizes import measure
     from jaxcontact.bench import time_vs_error
 
     scene = cutting_scene(2_000, 18.0)
     x, start, end = _scene_arrays(scene)
     reference = oracle.reference_contact(x, start, end, scene.radius)
-    plan = plan_buckets(scene.x, scene.surface, radius=scene.radius)
-    small = time_vs_error._shrunk(plan, block_capacity=0.25)
-    assert small.block_capacity == max(1, int(plan.block_capacity * 0.25))
-    contact = bucket_sort(scene.x, scene.surface, radius=scene.radius, plan=small)
+    sizes = measure(scene.x, scene.surface, radius=scene.radius)
+    right = _run.sized_contact(scene.radius, sizes)(scene.x, scene.surface)
+    assert not bool(right.overflow)
+    assert _run.check(right, x, start, end, reference).missed == 0
+    small = time_vs_error._shrunk(sizes, block_capacity=0.25)
+    assert small.block_capacity == max(1, int(sizes.block_capacity * 0.25))
+    contact = _run.sized_contact(scene.radius, small)(scene.x, scene.surface)
     mismatch = _run.check(contact, x, start, end, reference)
     assert bool(contact.overflow) and mismatch.missed > 0
 
@@ -183,4 +186,5 @@ def test_paper_test1_rows():
     assert all(row["nodes"] == 4 and row["median_ms"] > 0 for row in rows)
     assert rows[0]["note"] == "same contacts"  # all_to_all against the float64 oracle
     assert "0 rows differ" in rows[2]["note"]  # swept against the float64 brute force
+    assert "0 rows differ" in rows[3]["note"]  # bucket_swept (sized), likewise
     assert "| all_to_all |" in paper_tests.averages(rows)

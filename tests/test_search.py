@@ -37,12 +37,12 @@ def surface_at(nodes, segments):
     return Surface(nodes, segments)
 
 
-@pytest.mark.parametrize("method", ["auto", "binned"])
-def test_closest_equals_all_to_all_at_every_step_and_outgrown_sizes_say_so(method):
+@pytest.mark.parametrize("method, skin", [("auto", SKIN), ("binned", SKIN), ("auto", 0.0)])
+def test_closest_equals_all_to_all_at_every_step_and_outgrown_sizes_say_so(method, skin):
     xs, nodes, segments = trajectory(jnp.float32)
     # Sizes measured with the tool clear of the workpiece and no slack: the
     # tool moving in outgrows them.
-    search = Search(radius=RADIUS, skin=SKIN, method=method, slack=1.0)
+    search = Search(radius=RADIUS, skin=skin, method=method, slack=1.0)
     state = search.allocate(xs[0], surface_at(nodes[0], segments))
     assert state.sizes.use_cells == (method == "binned")
     step = jax.jit(search.closest)
@@ -59,8 +59,11 @@ def test_closest_equals_all_to_all_at_every_step_and_outgrown_sizes_say_so(metho
         assert_same_contact(contact, all_to_all(x, surface, radius=RADIUS), RADIUS)
         state = next_state
     assert overflows >= 1
-    assert 0 < int(state.rebuilds) < NUM_STEPS  # candidates found again, and reused
     assert not bool(state.overflow)
+    if skin:
+        assert 0 < int(state.rebuilds) < NUM_STEPS  # candidates found again, and reused
+    else:
+        assert state.candidates is None and int(state.rebuilds) == 0
 
 
 def test_closest_in_a_scan_under_jit_equals_all_to_all_at_every_step():

@@ -2,7 +2,9 @@
 
 Every benchmark collects ``dict`` rows with the same keys (``COLUMNS``), so
 one CSV writer and one table printer serve them all, and a row carries its
-own oracle check beside its timing.
+own oracle check beside its timing. ``sized_contact`` and ``sized_crossing``
+are the bucket sorts the benchmarks time: fixed ``Sizes`` measured outside
+the timer, the whole search (broad phase included) inside it.
 """
 
 from __future__ import annotations
@@ -14,10 +16,12 @@ import platform
 import sys
 
 import jax
+import jax.numpy as jnp
 import numpy as np
 
-from jaxcontact.bench.timing import pinned_note
+from jaxcontact import _bucket
 from jaxcontact.bench import oracle
+from jaxcontact.bench.timing import pinned_note
 
 COLUMNS = (
     "scene",
@@ -70,6 +74,37 @@ def timing_fields(timing) -> dict:
         "p90_ms": round(timing.p90_s * 1e3, 4),
         "runs": timing.runs,
     }
+
+
+def sized_contact(radius, sizes):
+    """``bucket_sort`` with fixed ``sizes``, jitted: ``fn(x, surface) -> Contact``.
+
+    The benchmarks' "bucket_sort (sized)": the sizes are measured once outside
+    the timer (``jaxcontact._sizes.measure``); every call runs the whole
+    search with them, broad phase included. The one-call ``bucket_sort``
+    measures them again at every call, on the host.
+    """
+
+    @jax.jit
+    def contact(x, surface):
+        _bucket.check_sizes(sizes, x.shape[0], for_paths=False)
+        surface = surface._replace(segments=jnp.asarray(surface.segments, jnp.int32))
+        return _bucket.contact_jit(x, surface, jnp.asarray(radius, x.dtype), None, sizes=sizes)
+
+    return contact
+
+
+def sized_crossing(sizes):
+    """``bucket_swept`` with fixed ``sizes``, jitted: ``fn(x_prev, x, surface) -> Crossing``
+    (the benchmarks' "bucket_swept (sized)"; see ``sized_contact``)."""
+
+    @jax.jit
+    def crossing(x_prev, x, surface):
+        _bucket.check_sizes(sizes, x.shape[0], for_paths=True)
+        surface = surface._replace(segments=jnp.asarray(surface.segments, jnp.int32))
+        return _bucket.crossing_jit(x_prev, x, surface, None, sizes=sizes)
+
+    return crossing
 
 
 def answer_of(result):

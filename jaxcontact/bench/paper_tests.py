@@ -1,13 +1,16 @@
-"""The source paper's Tests 1 and 2 (SCENES.md, scene 1), as its Figs. 8 and 9 plot them.
+"""The source paper's Tests 1 and 2 (docs/scenes.md, scene 1), as its Figs. 8 and 9 plot them.
 
 Test 1 refines the workpiece (face length 10, d = 5) from 4 to 82,369 nodes;
 Test 2 moves the tool (63,001 nodes, face length 20) from d = 0 to 10 in 21
-steps. Each position is answered by ``all_to_all``, ``bucket_sort``,
-``swept`` and ``bucket_swept`` (float32, jit), timed round-robin, compile time
-apart. In Test 2 every method compiles once: the bucket plans are made for all
-21 positions together (``replan``), as a simulation would size them. Closest
-points are checked against the float64 oracle (``oracle.reference_contact``),
-crossings against a float64 NumPy brute force (``baselines.brute_crossing``).
+steps. Each position is answered by ``all_to_all``, ``bucket_sort (sized)``,
+``swept`` and ``bucket_swept (sized)`` (float32, jit), timed round-robin,
+compile time apart. "(sized)": the bucket sort with its ``Sizes`` measured
+outside the timer (``jaxcontact._sizes.measure``) and its whole search, broad
+phase included, inside. In Test 2 every method compiles once: the sizes are
+measured for all 21 positions together (the largest of each capacity,
+``_sizes.largest``), as a simulation would size them. Closest points are
+checked against the float64 oracle (``oracle.reference_contact``), crossings
+against a float64 NumPy brute force (``baselines.brute_crossing``).
 
 The plots draw the paper's own averages (Matlab, Intel Core i5-2430M: bucket
 sort 0.02 s, all-to-all 0.64 s) as reference lines.
@@ -23,42 +26,43 @@ import os
 import jax
 import numpy as np
 
-from jaxcontact import all_to_all, bucket_sort, bucket_swept, plan_buckets, replan, swept
-from jaxcontact.bench.timing import compiled_call, time_interleaved
+from jaxcontact import all_to_all, swept
+from jaxcontact._sizes import largest, measure
 from jaxcontact.bench import _run, baselines, oracle
+from jaxcontact.bench.timing import compiled_call, time_interleaved
 from jaxcontact.scenes import paper_scene
 
 TEST1_SIZES = (1, 9, 30, 99, 173, 250, 286)
 TEST2_TRAVELS = tuple(0.5 * step for step in range(21))
 PAPER_AVERAGE_S = {"bucket sort (paper)": 0.02, "all-to-all (paper)": 0.64}
-METHODS = ("all_to_all", "bucket_sort", "swept", "bucket_swept")
+METHODS = ("all_to_all", "bucket_sort (sized)", "swept", "bucket_swept (sized)")
 
 
-def _detectors(scene, plans):
+def _detectors(scene, sizes):
     """name -> (jitted fn, args) for the four methods on ``scene``."""
-    contact_plan, path_plan = plans
+    contact_sizes, path_sizes = sizes
     return {
         "all_to_all": (
             jax.jit(functools.partial(all_to_all, radius=scene.radius)),
             (scene.x, scene.surface),
         ),
-        "bucket_sort": (
-            jax.jit(functools.partial(bucket_sort, radius=scene.radius, plan=contact_plan)),
+        "bucket_sort (sized)": (
+            _run.sized_contact(scene.radius, contact_sizes),
             (scene.x, scene.surface),
         ),
         "swept": (jax.jit(swept), (scene.x_prev, scene.x, scene.surface)),
-        "bucket_swept": (
-            jax.jit(functools.partial(bucket_swept, plan=path_plan)),
+        "bucket_swept (sized)": (
+            _run.sized_crossing(path_sizes),
             (scene.x_prev, scene.x, scene.surface),
         ),
     }
 
 
-def _plans(scene):
-    """``(contact plan, path plan)`` sized for ``scene``, made on the host."""
+def _sizes(scene):
+    """``(contact sizes, path sizes)`` for ``scene``, measured on the host."""
     return (
-        plan_buckets(scene.x, scene.surface, radius=scene.radius),
-        plan_buckets(scene.x, scene.surface, x_prev=scene.x_prev),
+        measure(scene.x, scene.surface, radius=scene.radius),
+        measure(scene.x, scene.surface, x_prev=scene.x_prev),
     )
 
 
@@ -71,7 +75,7 @@ def _checks(scene, results) -> dict:
     crossing = baselines.brute_crossing(np, x_prev, x64, start64, end64)
     checks = {}
     for name, result in results.items():
-        if name in ("all_to_all", "bucket_sort"):
+        if name in ("all_to_all", "bucket_sort (sized)"):
             checks[name] = _run.check(result, x, start, end, reference)
         else:
             wrong = int(np.sum(np.asarray(result.segment) != crossing[0]))
@@ -98,7 +102,7 @@ def run_test1(sizes, repeats) -> list[dict]:
     rows = []
     for n in _run.progress(sizes, "paper Test 1"):
         scene = paper_scene(n, length=10.0, d=5.0)
-        calls = _detectors(scene, _plans(scene))
+        calls = _detectors(scene, _sizes(scene))
         timings = time_interleaved(calls, repeats=repeats)
         results = {name: fn(*args) for name, (fn, args) in calls.items()}
         rows += _rows("paper Test 1", scene, f"n={n}", timings, _checks(scene, results))
@@ -107,19 +111,19 @@ def run_test1(sizes, repeats) -> list[dict]:
 
 def run_test2(n, travels, repeats) -> list[dict]:
     scenes = [paper_scene(n, length=20.0, d=d) for d in travels]
-    contact_plan, path_plan = _plans(scenes[0])
+    contact_sizes, path_sizes = _sizes(scenes[0])
     for scene in scenes[1:]:
-        contact_plan = replan(contact_plan, scene.x, scene.surface, radius=scene.radius)
-        path_plan = replan(path_plan, scene.x, scene.surface, x_prev=scene.x_prev)
-    # Compiled once for all positions: they share shapes and plans.
+        contact_sizes = largest(contact_sizes, measure(scene.x, scene.surface, radius=scene.radius))
+        path_sizes = largest(path_sizes, measure(scene.x, scene.surface, x_prev=scene.x_prev))
+    sizes = (contact_sizes, path_sizes)
+    # Compiled once for all positions: they share shapes and sizes.
     compiled, compile_s = {}, {}
-    for name, (fn, args) in _detectors(scenes[0], (contact_plan, path_plan)).items():
+    for name, (fn, args) in _detectors(scenes[0], sizes).items():
         compiled[name], compile_s[name] = compiled_call(fn, args)
     rows = []
     for d, scene in _run.progress(list(zip(travels, scenes, strict=True)), "paper Test 2"):
         calls = {
-            name: (compiled[name], args)
-            for name, (_, args) in _detectors(scene, (contact_plan, path_plan)).items()
+            name: (compiled[name], args) for name, (_, args) in _detectors(scene, sizes).items()
         }
         timings = time_interleaved(calls, repeats=repeats)
         timings = {name: t._replace(compile_s=compile_s[name]) for name, t in timings.items()}
@@ -137,7 +141,7 @@ def averages(rows) -> str:
     # The paper detects by paths crossing the tool and by closest points both; its
     # averages stand beside the dense and the binned methods of either kind.
     dense, binned = "640 ms (all-to-all)", "20 ms (bucket sort)"
-    paper = {"all_to_all": dense, "swept": dense, "bucket_sort": binned, "bucket_swept": binned}
+    paper = dict(zip(METHODS, (dense, binned, dense, binned), strict=True))
     for name in METHODS:
         means = []
         for test in ("paper Test 1", "paper Test 2"):

@@ -1,14 +1,15 @@
 """jaxcontact beside its peers: the same closest-segment query, timed in one process.
 
-Scenes (SCENES.md): the cutting scene with the tool in the workpiece
+Scenes (docs/scenes.md): the cutting scene with the tool in the workpiece
 (``x_tip = 18``) from 10^3 to 10^6 nodes, the same with the tool clear of it
 (``x_tip = 20.5``), and the rough die from (10^4, 10^3) to (10^6, 10^5). On
-each, ``all_to_all`` and ``bucket_sort`` (float32, jit, plan made outside the
-timer) and every peer of ``baselines.PEERS`` that is installed are run
-round-robin; ``ratio`` is a method's median over ``bucket_sort``'s. Every
-answer is checked against the float64 oracle, and each kind of disagreement
-is its own column (missed, false, ties at a shared vertex, wrong segment,
-largest gap error).
+each, ``all_to_all`` and ``bucket_sort (sized)`` (float32, jit: the bucket
+sort with its ``Sizes`` measured outside the timer, its whole search, broad
+phase included, inside) and every peer of ``baselines.PEERS`` that is
+installed are run round-robin; ``ratio`` is a method's median over
+``bucket_sort (sized)``'s. Every answer is checked against the float64
+oracle, and each kind of disagreement is its own column (missed, false, ties
+at a shared vertex, wrong segment, largest gap error).
 
 A method is skipped, with the reason in its row, where it would hold more
 than ``PAIR_BUDGET`` slave-segment pairs at once (the dense NumPy plane) or
@@ -28,11 +29,14 @@ import time
 import jax
 import numpy as np
 
-from jaxcontact import all_to_all, bucket_sort, plan_buckets
-from jaxcontact.bench.timing import Timing, compiled_call, time_interleaved
+from jaxcontact import all_to_all
+from jaxcontact._sizes import measure
 from jaxcontact.bench import _run, baselines, oracle
+from jaxcontact.bench.timing import Timing, compiled_call, time_interleaved
 from jaxcontact.scenes import cutting_scene, rough_die_scene
 
+# The library's bucket sort, as timed here: fixed sizes, measured outside the timer.
+LIBRARY = "bucket_sort (sized)"
 PAIR_BUDGET = 5e7  # NumPy (N, M, 2) float32 temporaries: about 0.4 GB each
 DENSE_BUDGET = 1.2e9  # all_to_all pairs per call: a few seconds on a CPU core
 
@@ -79,16 +83,13 @@ def _skip_reason(name, x, start, end, radius, quick) -> str | None:
 def _methods(scene):
     """name -> (fn, args): the library's two detectors, then the peers."""
     radius = scene.radius
-    plan = plan_buckets(scene.x, scene.surface, radius=radius)
+    sizes = measure(scene.x, scene.surface, radius=radius)
     methods = {
         "all_to_all": (
             jax.jit(functools.partial(all_to_all, radius=radius)),
             (scene.x, scene.surface),
         ),
-        "bucket_sort": (
-            jax.jit(functools.partial(bucket_sort, radius=radius, plan=plan)),
-            (scene.x, scene.surface),
-        ),
+        LIBRARY: (_run.sized_contact(radius, sizes), (scene.x, scene.surface)),
     }
     for name, (_, prepare) in baselines.PEERS.items():
         methods[name] = prepare
@@ -131,7 +132,7 @@ def run_scene(kind, size, parameter, repeats, slow_s, quick=False) -> list[dict]
         entry["compile_s"] = "" if compile_s is None else round(compile_s, 3)
         rows.append(entry)
     timings = {**time_interleaved(timed, repeats=repeats, warmup=0), **single}
-    library_ms = timings["bucket_sort"].median_s * 1e3
+    library_ms = timings[LIBRARY].median_s * 1e3
     for entry in rows:
         timing = timings.get(entry["method"])
         if timing is None:
@@ -142,7 +143,7 @@ def run_scene(kind, size, parameter, repeats, slow_s, quick=False) -> list[dict]
 
 
 def ratios(rows) -> str:
-    """Markdown pivot: each method's median over ``bucket_sort``'s, one column per scene."""
+    """Markdown pivot: each method's median over ``bucket_sort (sized)``'s, one column per scene."""
     scenes = list(dict.fromkeys((r["scene"], r["nodes"]) for r in rows))
     header = [f"{scene.replace(' (x_tip=', ' (')}, N={nodes:,}" for scene, nodes in scenes]
     lines = ["| method | " + " | ".join(header) + " |", "|---|" + "---:|" * len(scenes)]
@@ -169,7 +170,7 @@ def plot(rows, out) -> list[str]:
         mine = [r for r in rows if r["scene"].startswith(kind) and r["median_ms"] != ""]
         for name in dict.fromkeys(r["method"] for r in mine):
             points = [(r["nodes"], r["median_ms"]) for r in mine if r["method"] == name]
-            style = "-" if name in ("all_to_all", "bucket_sort") else "--"
+            style = "-" if name in ("all_to_all", LIBRARY) else "--"
             axes.plot(*zip(*points, strict=True), style, marker="o", ms=3, label=name)
         axes.set(xscale="log", yscale="log", xlabel="slave nodes N", ylabel="median (ms)")
         axes.set_title(kind, fontsize=9)
@@ -198,7 +199,10 @@ def run(quick: bool, out: str, repeats: int | None = None, slow_s: float | None 
         "",
         _run.markdown(rows, (*columns, *more)),
     ]
-    note = "float32 inputs; medians of interleaved runs; ratio = median / bucket_sort's median."
+    note = (
+        "float32 inputs; medians of interleaved runs; ratio = median / bucket_sort (sized)'s"
+        " median (bucket_sort (sized): the bucket sort with sizes measured outside the timer)."
+    )
     text = _run.section("peers", "Peers", quick, note, body, pictures)
     _run.write(out, "peers", rows, text)
     return text

@@ -1,12 +1,14 @@
-"""Run time against error: what each precision and each bucket plan buys, and what it costs.
+"""Run time against error: what each precision and each bucket sort's sizes buy, and what it costs.
 
 Part 1: on the cutting scene (tool in, ``x_tip = 18``) and the rough die, run
-``all_to_all`` and ``bucket_sort`` in float32 and float64, and ``bucket_sort``
-with plans of shrinking capacity (blocks kept, segments per cell) and other
-cell sizes, all round-robin. Each is checked against the float64 oracle of the
-float64 scene: missed and false contacts, wrong segments, the largest gap
-error. A plan too small for the scene sets ``overflow`` and misses contacts:
-the Pareto plot shows that trade.
+``all_to_all`` and ``bucket_sort (sized)`` in float32 and float64, and
+``bucket_sort (sized)`` with sizes of shrinking capacity (blocks kept,
+segments per cell) and other cell sizes, all round-robin. "(sized)": the
+bucket sort with ``Sizes`` measured outside the timer
+(``jaxcontact._sizes.measure``), its whole search inside. Each is checked
+against the float64 oracle of the float64 scene: missed and false contacts,
+wrong segments, the largest gap error. Sizes too small for the scene set
+``overflow`` and miss contacts: the Pareto plot shows that trade.
 
 Part 2: the float32 gap error against a coordinate offset (the whole scene
 moved by ``(o, o)``, ``o`` from 1 to 10^6): against the float64 scene, and
@@ -26,9 +28,10 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxcontact import all_to_all, bucket_sort, plan_buckets
-from jaxcontact.bench.timing import time_interleaved
+from jaxcontact import all_to_all, bucket_sort
+from jaxcontact._sizes import measure
 from jaxcontact.bench import _run, oracle
+from jaxcontact.bench.timing import time_interleaved
 from jaxcontact.scenes import Scene, cutting_scene, rough_die_scene
 
 OFFSETS = (0.0, 1.0, 10.0, 1e2, 1e3, 1e4, 1e5, 1e6)
@@ -41,14 +44,14 @@ def _cast(scene: Scene, dtype) -> Scene:
     )
 
 
-def _shrunk(plan, **factors):
-    """``plan`` with each named capacity multiplied by its factor (at least 1)."""
-    fields = {name: max(1, int(getattr(plan, name) * f)) for name, f in factors.items()}
-    return dataclasses.replace(plan, **fields)
+def _shrunk(sizes, **factors):
+    """``sizes`` with each named capacity multiplied by its factor (at least 1)."""
+    fields = {name: max(1, int(getattr(sizes, name) * f)) for name, f in factors.items()}
+    return dataclasses.replace(sizes, **fields)
 
 
 def variants(scene64: Scene, quick: bool) -> dict:
-    """name -> (fn, args) for every precision and plan compared on ``scene64``."""
+    """name -> (fn, args) for every precision and sizes compared on ``scene64``."""
     calls = {}
     radius = scene64.radius
     for dtype in (jnp.float32, jnp.float64):
@@ -56,28 +59,27 @@ def variants(scene64: Scene, quick: bool) -> dict:
         bits = "f32" if dtype == jnp.float32 else "f64"
         args = (scene.x, scene.surface)
         calls[f"all_to_all {bits}"] = (jax.jit(functools.partial(all_to_all, radius=radius)), args)
-        plan = plan_buckets(scene.x, scene.surface, radius=radius)
-        calls[f"bucket_sort {bits}"] = (
-            jax.jit(functools.partial(bucket_sort, radius=radius, plan=plan)),
-            args,
-        )
+        sizes = measure(scene.x, scene.surface, radius=radius)
+        calls[f"bucket_sort (sized) {bits}"] = (_run.sized_contact(radius, sizes), args)
     scene = _cast(scene64, jnp.float32)
     args = (scene.x, scene.surface)
-    plans = {}
-    default = plan_buckets(scene.x, scene.surface, radius=radius)
+    chosen = {}
+    default = measure(scene.x, scene.surface, radius=radius)
     for factor in (0.5,) if quick else (0.75, 0.5, 0.25):
-        plans[f"bucket_sort f32, blocks x{factor}"] = _shrunk(default, block_capacity=factor)
-    cells = plan_buckets(scene.x, scene.surface, radius=radius, use_cells=True)
+        chosen[f"bucket_sort (sized) f32, blocks x{factor}"] = _shrunk(
+            default, block_capacity=factor
+        )
+    cells = measure(scene.x, scene.surface, radius=radius, use_cells=True)
     for factor in (0.5,) if quick else (0.5, 0.25):
-        plans[f"bucket_sort f32 cells, per-cell capacity x{factor}"] = _shrunk(
+        chosen[f"bucket_sort (sized) f32 cells, per-cell capacity x{factor}"] = _shrunk(
             cells, cell_capacity=factor
         )
     for factor in () if quick else (0.5, 2.0):
-        plans[f"bucket_sort f32 cells, cell edge x{factor}"] = plan_buckets(
+        chosen[f"bucket_sort (sized) f32 cells, cell edge x{factor}"] = measure(
             scene.x, scene.surface, radius=radius, use_cells=True, cell_factor=factor
         )
-    for name, plan in plans.items():
-        calls[name] = (jax.jit(functools.partial(bucket_sort, radius=radius, plan=plan)), args)
+    for name, sizes in chosen.items():
+        calls[name] = (_run.sized_contact(radius, sizes), args)
     return calls
 
 
@@ -110,10 +112,8 @@ def run_offsets(num_nodes, offsets, with_bucket) -> list[dict]:
         )
         scene = _cast(moved, jnp.float32)
         if with_bucket:
-            plan = plan_buckets(scene.x, scene.surface, radius=base.radius)
-            detectors["bucket_sort"] = jax.jit(
-                functools.partial(bucket_sort, radius=base.radius, plan=plan)
-            )
+            # Not timed here: the one-call form, its sizes measured for this scene.
+            detectors["bucket_sort"] = functools.partial(bucket_sort, radius=base.radius)
         start, end = _run.endpoints(moved.surface)
         exact = oracle.reference_contact(np.asarray(moved.x), start, end, base.radius)
         start32, end32 = _run.endpoints(scene.surface)
@@ -143,7 +143,7 @@ def plot(rows, out) -> list[str]:
     figure, panels = plt.subplots(2, len(scenes), figsize=(6 * len(scenes), 8), squeeze=False)
     for column, scene in enumerate(scenes):
         mine = [r for r in tradeoff if r["scene"] == scene]
-        for axes, measure, ylabel in (
+        for axes, metric, ylabel in (
             (
                 panels[0][column],
                 lambda r: r["missed"] + r["false"] + r["wrong_segment"],
@@ -155,7 +155,7 @@ def plot(rows, out) -> list[str]:
                 "largest gap error",
             ),
         ):
-            points = sorted((r["median_ms"], measure(r), r["method"]) for r in mine)
+            points = sorted((r["median_ms"], metric(r), r["method"]) for r in mine)
             front, best = [], np.inf
             for time_ms, error, _ in points:  # Pareto front: no faster point is as accurate
                 if error < best:

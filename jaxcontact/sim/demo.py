@@ -1,10 +1,10 @@
 """``jaxcontact demo``: the ploughing simulation run, timed and drawn.
 
-Runs ``simulate.run`` once for its results (replanning on overflow), then
-times it: the whole scan, and the same scan with detection replaced by a
-fixed contact result (``run(..., detect=False)``: the same elastic update,
-the same force assembly, no ``candidates_expired``, ``find_candidates`` or
-``bucket_sort``), the two in alternation. The detection share is the median
+Runs ``ploughing.simulate`` once for its results (growing the search sizes
+on overflow), then times it: the whole scan, and the same scan with
+detection replaced by a fixed contact result (``run(..., detect=False)``:
+the same elastic update, the same force assembly, no ``Search.closest``),
+the two in alternation. The detection share is the median
 over those pairs of ``1 - without / with``: what detection adds to a step,
 measured in the compiled loop where it runs.
 The numbers are printed; the PNGs are drawn only when matplotlib is installed.
@@ -96,7 +96,7 @@ def run_demo(
         detection_share=share,
         rebuilds=int(final.rebuilds),
         most_active=int(history.active.max()),
-        penetration_ratio=float(history.penetration.max()) / config.radius,
+        penetration_ratio=float(history.penetration.max()) / config.search.radius,
         mean_force=tuple(float(f) for f in history.force.mean(axis=0)),
         first_s=first_s,
     )
@@ -136,7 +136,7 @@ def main(args: argparse.Namespace) -> int:
     material = config.material
     print(
         f"ploughing: {summary.nodes:,} nodes, {mesh.triangles.shape[0]:,} triangles, "
-        f"{config.plan.num_slaves:,} slaves; steel E={material.young:g} MPa, "
+        f"{config.sizes.num_slaves:,} slaves; steel E={material.young:g} MPa, "
         f"nu={material.poisson:g}, rho={material.density:g} t/mm3 x {material.mass_scale:g} "
         f"(mass scaling); {args.dtype}"
     )
@@ -155,7 +155,7 @@ def main(args: argparse.Namespace) -> int:
     )
     print(
         f"  list rebuilds    {summary.rebuilds:10d}   "
-        f"(of {config.steps} steps; skin {config.skin:.3g} mm)"
+        f"(of {config.steps} steps; skin {config.search.skin:.3g} mm)"
     )
     print(f"  most active      {summary.most_active:10d}   slaves in contact at one step")
     print(f"  penetration      {summary.penetration_ratio:10.1%}   of the grid spacing, at most")
@@ -185,7 +185,7 @@ def _draw(mesh, controls, config, final, history: History, folder: str) -> list[
     stress = np.asarray(von_mises(sigma, config.material))
     surface = tool_surface(float(history.x_tip[-1]), controls.rake)
     rows = np.arange(len(x)) if config.all_slaves else np.asarray(mesh.boundary)
-    contact = all_to_all(x[rows], surface, radius=config.radius)
+    contact = all_to_all(x[rows], surface, radius=config.search.radius)
     active, found = np.asarray(contact.active), np.asarray(contact.found)
     tool = np.asarray(surface.nodes)
     mesh_path = os.path.join(folder, "ploughing_mesh.png")

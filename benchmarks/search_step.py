@@ -1,0 +1,186 @@
+"""One contact-search step at 81,939 nodes: fixed sizes, a reused ``Search`` state, a re-find.
+
+The cutting scene (docs/scenes.md) at 81,939 nodes with the tool tip at
+``x = 18``, float32, radius 0.1. Four programs answer the same query on the
+same ``x``, timed round-robin in one process
+(``jaxcontact.bench.timing.time_interleaved``: each compiled ahead of the
+runs, its compile time reported apart; warm-up runs; then ``--repeats``
+rounds, every call ended by ``block_until_ready``; median and 10th-90th
+percentile):
+
+- (a) ``bucket_sort (sized)``: the bucket sort with ``Sizes`` measured once
+  at the radius (``jaxcontact._sizes.measure``) and reused every call
+  (``jaxcontact._bucket.contact_jit``): the broad phase and the narrow phase
+  every call, no measuring.
+- (b) ``Search.closest (reused state)``: ``Search(radius=0.1, skin=0.05)``,
+  its state allocated at ``x``; every call is on that same ``x``, so the
+  skin rule holds and the candidates found within ``radius + skin`` are
+  kept: the skin check, then the narrow phase on the candidates.
+- (c) ``Search.closest (re-find every call)``: the same search, its state
+  allocated at ``x`` moved by ``(2 skin, 0)``; every call is on ``x``, so
+  the slaves have moved twice the skin since the candidates were found and
+  each call finds them again inside the step (the skin check, the find, the
+  narrow phase). The state is not threaded from call to call: each call
+  starts from that same stale state, and the state it returns is checked to
+  count one rebuild. (b)'s and (c)'s states are sized for both positions
+  together (``allocate(..., at_least=...)``), so they run one program.
+- (d) ``all_to_all``: every slave against every segment.
+
+Each answer's ``segment`` and ``found`` are compared with ``all_to_all``'s
+(the ``check`` column), and each overflow flag is reported.
+
+    python benchmarks/search_step.py                 # 200 rounds
+    python benchmarks/search_step.py --quick         # 20 rounds, a smoke test
+    python benchmarks/search_step.py --out DIR       # also writes DIR/search_step.md
+    taskset -c 0 python benchmarks/search_step.py    # pinned to one core
+"""
+
+from __future__ import annotations
+
+import argparse
+import functools
+import os
+import sys
+
+import jax
+import numpy as np
+
+from jaxcontact import Contact, Search, all_to_all
+from jaxcontact._sizes import measure
+from jaxcontact.bench._run import machine, sized_contact
+from jaxcontact.bench.timing import time_interleaved
+from jaxcontact.scenes import cutting_scene
+
+NODES = 81_939
+SKIN = 0.05
+
+WHAT = {
+    "bucket_sort (sized)": "broad + narrow phase, sizes fixed (measured once, at the radius)",
+    "Search.closest (reused state)": "skin check; candidates kept; narrow phase on them",
+    "Search.closest (re-find every call)": "skin check; candidates found again; narrow phase",
+    "all_to_all": "every slave against every segment",
+}
+
+
+def differences(result, reference) -> str:
+    """Rows whose segment or found flag differ from ``all_to_all``'s."""
+    segment = np.asarray(result.segment) != np.asarray(reference.segment)
+    found = np.asarray(result.found) != np.asarray(reference.found)
+    wrong = int(np.sum(segment | found))
+    return f"{wrong} of {int(np.sum(np.asarray(reference.found)))} found differ"
+
+
+def programs(scene, radius: float, skin: float):
+    """name -> (fn, args), and notes on how (c) was set up."""
+    x, surface = scene.x, scene.surface
+    sized_sizes = measure(x, surface, radius=radius)
+    sized = sized_contact(radius, sized_sizes)
+    search = Search(radius=radius, skin=skin)
+    # Moved by twice the skin in x: the skin rule fails for every call on x.
+    moved = x.at[:, 0].add(2 * skin)
+    # Both states sized to hold both positions, so that (b) and (c) run one
+    # program and differ only in the branch the skin check takes.
+    stale = search.allocate(moved, surface, at_least=search.allocate(x, surface))
+    reused = search.allocate(x, surface, at_least=stale)
+    step = jax.jit(search.closest)
+    dense = jax.jit(functools.partial(all_to_all, radius=radius))
+    calls = {
+        "bucket_sort (sized)": (sized, (x, surface)),
+        "Search.closest (reused state)": (step, (reused, x, surface)),
+        "Search.closest (re-find every call)": (step, (stale, x, surface)),
+        "all_to_all": (dense, (x, surface)),
+    }
+    shared = stale.sizes == reused.sizes
+    same = "the same program as (b)" if shared else f"other sizes than (b): {stale.sizes}"
+    notes = [
+        f"(a) sizes at radius {radius:g}: {brief(sized_sizes)}; (b), (c) sizes at radius + skin "
+        f"{radius + skin:g}, for x and x + ({2 * skin:g}, 0) together: {brief(reused.sizes)}.",
+        f"(c) re-finds by a stale state: allocated at x + ({2 * skin:g}, 0), called on x "
+        f"(moved {2 * skin:g} > skin {skin:g}), not threaded; {same}"
+        + (" (its compile time is JAX's cache look-up of (b)'s)." if shared else "."),
+    ]
+    return calls, notes
+
+
+def brief(sizes) -> str:
+    """The capacities that matter on this scene, in a few words."""
+    blocks = -(-sizes.num_slaves // sizes.block_size)
+    text = f"{sizes.block_capacity} of {blocks} blocks of {sizes.block_size} slaves kept"
+    if sizes.use_cells:
+        return text + f", {sizes.grid_shape} cells of {sizes.cell_capacity} segments"
+    return text + ", each kept slave against every segment (no cells)"
+
+
+def table(calls, timings, results, reference) -> list[str]:
+    dense_ms = timings["all_to_all"].median_s * 1e3
+    lines = [
+        "| method | what a call does | median ms | p10-p90 ms | all_to_all / this "
+        "| compile s | check |",
+        "|---|---|---:|---:|---:|---:|---|",
+    ]
+    for name in calls:
+        timing = timings[name]
+        result = results[name]
+        contact, state = (result, None) if isinstance(result, Contact) else result
+        check = differences(contact, reference)
+        check += f"; overflow {bool(contact.overflow)}"
+        if state is not None:
+            check += f"; rebuilds {int(state.rebuilds)}"
+        ms = timing.median_s * 1e3
+        lines.append(
+            f"| {name} | {WHAT[name]} | {ms:.3f} "
+            f"| {timing.p10_s * 1e3:.3f}-{timing.p90_s * 1e3:.3f} | {dense_ms / ms:.1f}x "
+            f"| {timing.compile_s:.2f} | {check} |"
+        )
+    return lines
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="20 rounds: a smoke test")
+    parser.add_argument("--repeats", type=int, default=None, help="timed rounds (200)")
+    parser.add_argument("--warmup", type=int, default=5, help="untimed runs of each first")
+    parser.add_argument("--out", default=None, help="folder: write search_step.md there")
+    args = parser.parse_args(argv)
+    repeats = args.repeats or (20 if args.quick else 200)
+
+    scene = cutting_scene(NODES, x_tip=18.0, x_tip_prev=18.2)
+    radius = float(scene.radius)
+    calls, notes = programs(scene, radius, SKIN)
+    timings = time_interleaved(calls, repeats=repeats, warmup=args.warmup)
+    results = {name: jax.block_until_ready(fn(*fn_args)) for name, (fn, fn_args) in calls.items()}
+    reference = results["all_to_all"]
+
+    command = "python benchmarks/search_step.py" + " --quick" * args.quick
+    if args.repeats:
+        command += f" --repeats {args.repeats}"
+    if args.warmup != 5:
+        command += f" --warmup {args.warmup}"
+    nodes, segments = scene.x.shape[0], scene.surface.segments.shape[0]
+    text = "\n".join(
+        [
+            "## Search step",
+            "",
+            f"`{command}`; {machine()}; cutting scene x_tip=18, {nodes:,} nodes x "
+            f"{segments} segments, float32, radius {radius:g}, skin {SKIN:g}; "
+            f"median of {repeats} interleaved rounds after {args.warmup} warm-up runs, "
+            "compile apart.",
+            "",
+            *table(calls, timings, results, reference),
+            "",
+            *[f"- {note}" for note in notes],
+            "",
+        ]
+    )
+    print(text)
+    if args.out:
+        os.makedirs(args.out, exist_ok=True)
+        path = os.path.join(args.out, "search_step.md")
+        with open(path, "w") as stream:
+            stream.write(text)
+        print(f"wrote {path}", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
