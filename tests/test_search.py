@@ -250,3 +250,20 @@ def test_misuse_raises_a_clear_error():
         Search().allocate(scene.x, scene.surface)
     with pytest.raises(ValueError, match="searches paths only"):
         Search().closest(state, scene.x, scene.surface)
+
+
+def test_readme_search_snippet_runs():
+    import pathlib
+    import re
+
+    import jaxcontact
+
+    readme = pathlib.Path(__file__).resolve().parent.parent / "README.md"
+    section = readme.read_text().split("### The search object")[1].split("\n### ")[0]
+    snippet = re.findall(r"```python\n(.*?)```", section, flags=re.S)[0]
+    scene = cutting_scene(2_000, 18.0, x_tip_prev=18.2)
+    namespace = {"jaxcontact": jaxcontact, "x": scene.x, "x_prev": scene.x_prev}
+    namespace["surface"] = scene.surface
+    exec(compile(snippet, str(readme), "exec"), namespace)
+    assert not bool(namespace["contact"].overflow)
+    assert int(namespace["crossing"].crossed.sum()) > 0
