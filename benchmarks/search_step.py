@@ -1,7 +1,7 @@
 """One contact-search step at 81,939 nodes: fixed sizes, a reused ``Search`` state, a re-find.
 
 The cutting scene (docs/scenes.md) at 81,939 nodes with the tool tip at
-``x = 18``, float32, radius 0.1. Four programs answer the same query on the
+``x = 18``, float32, radius 0.1. Five programs answer the same query on the
 same ``x``, timed round-robin in one process
 (``jaxcontact.bench.timing.time_interleaved``: each compiled ahead of the
 runs, its compile time reported apart; warm-up runs; then ``--repeats``
@@ -24,7 +24,10 @@ percentile):
   starts from that same stale state, and the state it returns is checked to
   count one rebuild. (b)'s and (c)'s states are sized for both positions
   together (``allocate(..., at_least=...)``), so they run one program.
-- (d) ``all_to_all``: every slave against every segment.
+- (d) ``Search.closest (skin 0)``: ``Search(radius=0.1)`` keeps no
+  candidates; each call runs the whole bucket sort with the allocated sizes,
+  as (a) does, through the public step.
+- (e) ``all_to_all``: every slave against every segment.
 
 Each answer's ``segment`` and ``found`` are compared with ``all_to_all``'s
 (the ``check`` column), and each overflow flag is reported.
@@ -58,6 +61,7 @@ WHAT = {
     "bucket_sort (sized)": "broad + narrow phase, sizes fixed (measured once, at the radius)",
     "Search.closest (reused state)": "skin check; candidates kept; narrow phase on them",
     "Search.closest (re-find every call)": "skin check; candidates found again; narrow phase",
+    "Search.closest (skin 0)": "no candidates kept: broad + narrow phase, sizes allocated",
     "all_to_all": "every slave against every segment",
 }
 
@@ -83,11 +87,14 @@ def programs(scene, radius: float, skin: float):
     stale = search.allocate(moved, surface, at_least=search.allocate(x, surface))
     reused = search.allocate(x, surface, at_least=stale)
     step = jax.jit(search.closest)
+    plain = Search(radius=radius)
+    plain_state = plain.allocate(x, surface)
     dense = jax.jit(functools.partial(all_to_all, radius=radius))
     calls = {
         "bucket_sort (sized)": (sized, (x, surface)),
         "Search.closest (reused state)": (step, (reused, x, surface)),
         "Search.closest (re-find every call)": (step, (stale, x, surface)),
+        "Search.closest (skin 0)": (jax.jit(plain.closest), (plain_state, x, surface)),
         "all_to_all": (dense, (x, surface)),
     }
     shared = stale.sizes == reused.sizes

@@ -93,13 +93,15 @@ class Search:
       radius: the closest-point search radius (``closest``); ``None`` for a
         search of paths only.
       skin: ``0`` (the default) keeps no candidates: every ``closest`` runs
-        the whole bucket sort with the allocated sizes. Above 0, candidates
-        are found within ``radius + skin`` and reused until the largest slave
-        move plus the largest move of a real segment's end since exceeds it
-        (or a row or segment becomes real, or a segment is joined to other
-        nodes). Reuse skips the broad phase and the binning but reads every
-        row to check the rule: it pays with many segments (cells), less or
-        not at all with a small tool (``benchmarks/search_step.py``).
+        the whole bucket sort with the allocated sizes. Above 0, with cells,
+        candidates are found within ``radius + skin`` and reused until the
+        largest slave move plus the largest move of a real segment's end
+        since exceeds it (or a row or segment becomes real, or a segment is
+        joined to other nodes). Reuse skips the broad phase and the binning
+        but reads every row to check the rule, and searches the longer lists
+        of the wider reach: on the rough die at 10^5 x 10^4 it measured level
+        with the whole search. Without cells no candidates are kept (the
+        sizes are still measured at ``radius + skin``).
       method: ``"binned"``: bucket sort with the segments binned in cells,
         each kept slave against its cell's segments; ``"dense"``: bucket
         sort with each kept slave against every segment; ``"auto"``:
@@ -236,8 +238,11 @@ class Search:
         return SearchState(sizes, path_sizes, candidates, overflow, jnp.zeros((), jnp.int32))
 
     def _find(self, x, surface, mask, sizes: Sizes):
-        """``(candidates or None, overflow)``: none are kept without a skin."""
-        if self.skin == 0:
+        """``(candidates or None, overflow)``: none are kept without a skin or
+        without cells (re-culling the blocks of slaves reads ``x`` once; the
+        skin check would read it and the kept positions: measured 1.3 against
+        1.9 ms a step on the cutting scene, ``benchmarks/search_step.py``)."""
+        if self.skin == 0 or not sizes.use_cells:
             return None, jnp.zeros((), bool)
         reach = jnp.asarray(self._reach, x.dtype)
         candidates = _bucket.find_jit(x, surface, reach, mask, sizes=sizes)
