@@ -1,4 +1,4 @@
-"""A brute-force oracle, written from API.md alone, that returns float64 NumPy arrays.
+"""A brute-force oracle, written from the contract (docs/contract.md) alone, that returns float64 NumPy arrays.
 
 Plain loops over every (slave, segment) pair, one textbook formula each; it
 shares no code with the package. Every input float is an exact rational, and
@@ -97,7 +97,7 @@ def closest_point(x, a, b):
 
 
 def _prefer_outside(slave, nearest, candidates, ends):
-    """The README's tie rule (where jaxcontact deviates from API.md): ``(chosen, sign)``.
+    """The README's tie rule (where it departs from the first contract): ``(chosen, sign)``.
 
     Where the nearest segment's closest point is its start (end) node, the
     lowest-index real segment that ends (starts) at that same node index ties
@@ -140,7 +140,7 @@ def _prefer_outside(slave, nearest, candidates, ends):
 
 
 def oracle_contact(x, nodes, segments, seg_mask=None, slave_mask=None, radius=0.0) -> OracleContact:
-    """The ``Contact`` API.md describes, by looping over every pair."""
+    """The ``Contact`` docs/contract.md describes, by looping over every pair."""
     slaves = _rows(x)
     count = len(slaves)
     result = OracleContact(
@@ -210,7 +210,7 @@ def first_meeting(p0, p1, a, b):
 
 
 def oracle_crossing(x_prev, x, nodes, segments, seg_mask=None, slave_mask=None) -> OracleCrossing:
-    """The ``Crossing`` API.md describes, by looping over every pair."""
+    """The ``Crossing`` docs/contract.md describes, by looping over every pair."""
     starts, ends = _rows(x_prev), _rows(x)
     count = len(ends)
     result = OracleCrossing(

@@ -1,4 +1,4 @@
-"""``all_to_all`` against the brute-force oracle, and each special case of API.md."""
+"""``all_to_all`` against the brute-force oracle, and each special case of docs/contract.md."""
 
 import jax
 import jax.numpy as jnp
@@ -7,6 +7,8 @@ import pytest
 
 import jaxcontact
 from jaxcontact import Surface
+from jaxcontact._geometry import squared_distance
+from jaxcontact._lowest import lowest_score
 from jaxcontact.scenes import paper_scene
 from tests import helpers
 from tests.oracle import oracle_contact
@@ -64,18 +66,34 @@ def test_matches_oracle_on_random_scenes_without_masks():
     assert 0 < found < 4 * 9
 
 
-def test_first_index_wins_a_tie_across_segment_blocks(monkeypatch):
-    # Segments are scanned in unrolled blocks of _search._BLOCK (32) inside a
-    # lax.scan. Covering that path with M > 32 costs ~20 s of compilation, so
-    # the block is shrunk instead: ten segments take three blocks, the last one
-    # ragged. The second half repeats the first, so every slave ties exactly
-    # between k and k + 5 and must get the lower index.
-    monkeypatch.setattr(jaxcontact._lowest, "_BLOCK", 4)
+def test_first_index_wins_a_tie_across_segment_blocks():
+    # Above ``unroll`` steps, lowest_score scans the segments in unrolled
+    # blocks of ``block`` (32 and 8 in the detectors) inside a lax.scan.
+    # Covering that path with M > 32 costs ~20 s of compilation, so the
+    # reduction is run directly with ``unroll=4, block=4``: ten segments take
+    # three blocks, the last one ragged. The second half repeats the first, so
+    # every slave ties exactly between k and k + 5 and must get the lower index.
     scene = helpers.random_scene(7, 9, 5, np.float64)
     doubled = np.concatenate([scene.segments, scene.segments])
-    # A fresh function, so that no cached trace made with the real block size is reused.
-    fresh = jax.jit(lambda x, surface: jaxcontact.all_to_all(x, surface, radius=10.0))
-    contact = fresh(jnp.asarray(scene.x), Surface(jnp.asarray(scene.nodes), jnp.asarray(doubled)))
+    starts, ends = scene.nodes[doubled[:, 0]], scene.nodes[doubled[:, 1]]
+    pair_value = jax.vmap(squared_distance, in_axes=(0, None, None))
+
+    @jax.jit
+    def lowest(x, starts, ends):
+        def score(k):
+            return pair_value(x, starts[k], ends[k]), jnp.broadcast_to(k, x.shape[:1])
+
+        every = jax.vmap(pair_value, in_axes=(None, 0, 0))(x, starts, ends)
+        choice = lowest_score(score, len(starts), len(x), x.dtype, unroll=4, block=4)
+        return choice, every
+
+    choice, every = map(np.asarray, lowest(scene.x, starts, ends))
+    np.testing.assert_array_equal(every[:5], every[5:])  # exact ties
+    np.testing.assert_array_equal(choice, np.argmin(every, axis=0))  # the first of each tie
+    assert np.all(choice < 5)
+    # And the detector on the doubled surface (one unrolled pass) as the oracle has it.
+    surface = Surface(jnp.asarray(scene.nodes), jnp.asarray(doubled))
+    contact = all_to_all(jnp.asarray(scene.x), surface, radius=10.0)
     expected = oracle_contact(scene.x, scene.nodes, doubled, radius=10.0)
     helpers.assert_contact_matches(contact, expected, np.float64)
     assert np.all(expected.segment < 5)

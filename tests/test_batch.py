@@ -1,6 +1,4 @@
-"""Batches of scenes: every detector under vmap, one bucket plan for the batch."""
-
-import dataclasses
+"""Batches of scenes: every detector under vmap, one Search allocation for the batch."""
 
 import jax
 import jax.numpy as jnp
@@ -8,15 +6,13 @@ import numpy as np
 import pytest
 
 from jaxcontact import (
+    Search,
     Surface,
     all_to_all,
-    bucket_sort,
-    bucket_swept,
     contact_forces,
-    plan_batch,
-    plan_buckets,
     swept,
 )
+from jaxcontact._sizes import measure
 from jaxcontact.scenes import cutting_scene, rough_die_scene
 from tests.helpers import assert_same_contact, assert_same_crossing
 
@@ -44,59 +40,74 @@ def _row(tree, i):
     return jax.tree.map(lambda v: v if v.ndim == 0 else v[i], tree)
 
 
-@pytest.mark.parametrize("use_cells", [False, True])
-def test_one_plan_for_a_batch_of_contacts_equals_a_loop(use_cells):
+@pytest.mark.parametrize("method", ["dense", "binned"])
+def test_one_allocation_for_a_batch_of_contacts_equals_a_loop(method):
     scenes, _, x, surface, mask = _batch()
-    plan = plan_batch(x, surface, radius=RADIUS, mask=mask, use_cells=use_cells)
-    # The batch plan is at least as large as any scene's own.
+    search = Search(radius=RADIUS, method=method)
+    state = search.allocate(x, surface, mask=mask)
+    cells = method == "binned"
+    assert state.sizes.use_cells == cells
+    assert state.overflow.shape == state.rebuilds.shape == (len(scenes),)
+    # The batch's sizes are at least as large as any scene's own.
     for i, scene in enumerate(scenes):
-        own = plan_buckets(scene.x, scene.surface, radius=RADIUS, mask=mask[i], use_cells=use_cells)
-        assert plan.block_capacity >= own.block_capacity
-    detect = jax.jit(jax.vmap(lambda x, s, m: bucket_sort(x, s, radius=RADIUS, mask=m, plan=plan)))
-    batched = detect(x, surface, mask)
-    assert not bool(jnp.any(batched.overflow))
+        own = measure(scene.x, scene.surface, radius=RADIUS, mask=mask[i], use_cells=cells)
+        assert state.sizes.block_capacity >= own.block_capacity
+    detect = jax.jit(jax.vmap(lambda st, x, s, m: search.closest(st, x, s, mask=m)))
+    batched, state = detect(state, x, surface, mask)
+    assert not bool(jnp.any(batched.overflow)) and not bool(jnp.any(state.overflow))
     for i, scene in enumerate(scenes):
         dense = all_to_all(scene.x, scene.surface, radius=RADIUS, mask=mask[i])
         assert_same_contact(_row(batched, i), dense, RADIUS)
 
 
-def test_one_plan_for_a_batch_of_paths_equals_a_loop():
+def test_one_allocation_for_a_batch_of_paths_equals_a_loop():
     scenes, x_prev, x, surface, mask = _batch()
-    plan = plan_batch(x, surface, x_prev=x_prev, mask=mask)
-    detect = jax.jit(jax.vmap(lambda p, x, s, m: bucket_swept(p, x, s, mask=m, plan=plan)))
-    batched = detect(x_prev, x, surface, mask)
+    search = Search()  # paths only
+    state = search.allocate(x, surface, x_prev=x_prev, mask=mask)
+    assert state.sizes is None and state.path_sizes.for_paths
+    detect = jax.jit(jax.vmap(lambda st, p, x, s, m: search.swept(st, p, x, s, mask=m)))
+    batched, state = detect(state, x_prev, x, surface, mask)
+    assert not bool(jnp.any(state.overflow))
     for i, scene in enumerate(scenes):
         dense = swept(scene.x_prev, scene.x, scene.surface, mask=mask[i])
         assert int(dense.crossed.sum()) > 0 or TIPS[i] > 20
         assert_same_crossing(_row(batched, i), dense)
 
 
-def test_a_shared_surface_is_planned_for_every_scene():
+def test_a_shared_surface_is_allocated_for_every_scene():
     scenes, _, x, _, _ = _batch()
     shared = scenes[1].surface
-    plan = plan_batch(x, shared, radius=RADIUS)
-    batched = jax.vmap(lambda x: bucket_sort(x, shared, radius=RADIUS, plan=plan))(x)
+    search = Search(radius=RADIUS, method="dense")
+    state = search.allocate(x, shared)
+    batched, _ = jax.vmap(search.closest, in_axes=(0, 0, None))(state, x, shared)
     for i in range(len(scenes)):
         assert_same_contact(_row(batched, i), all_to_all(x[i], shared, radius=RADIUS), RADIUS)
 
 
-def test_plan_batch_grows_a_plan_that_another_scene_outgrows():
-    # Planned on the clear scene alone the plan keeps one block; the batch
-    # plan must hold the deep cut as well, and says so by not overflowing.
+def test_a_batch_allocation_grows_sizes_that_another_scene_outgrows():
+    # Measured on the clear scene alone the sizes keep one block; the batch's
+    # must hold the deep cut as well, and say so by not overflowing.
     scenes, _, x, surface, _ = _batch()
-    lone = plan_buckets(scenes[2].x, scenes[2].surface, radius=RADIUS)
-    detect = jax.vmap(lambda x, s, plan: bucket_sort(x, s, radius=RADIUS, plan=plan), (0, 0, None))
-    too_small = jax.jit(detect, static_argnums=2)(x, surface, lone)
-    assert bool(too_small.overflow[0])
-    plan = plan_batch(x, surface, radius=RADIUS)
-    assert dataclasses.replace(plan, block_capacity=lone.block_capacity) != plan
-    assert not bool(jnp.any(jax.jit(detect, static_argnums=2)(x, surface, plan).overflow))
+    search = Search(radius=RADIUS, method="dense")
+    lone = measure(scenes[2].x, scenes[2].surface, radius=RADIUS, use_cells=False)
+    assert lone.block_capacity == 1
+    detect = jax.jit(jax.vmap(search.closest))
+    starved = jax.vmap(lambda x, s: search.init(x, s, sizes=lone))(x, surface)
+    too_small, starved = detect(starved, x, surface)
+    assert bool(too_small.overflow[0]) and bool(starved.overflow[0])
+    state = search.allocate(x, surface)
+    assert state.sizes.block_capacity > lone.block_capacity
+    contact, state = detect(state, x, surface)
+    assert not bool(jnp.any(contact.overflow)) and not bool(jnp.any(state.overflow))
 
 
-def test_plan_batch_checks_the_batch_shape():
+def test_allocate_checks_the_batch_shape():
     scene = cutting_scene(100, 18.0)
-    with pytest.raises(ValueError, match=r"x must have shape \(B, N, 2\)"):
-        plan_batch(scene.x, scene.surface, radius=RADIUS)
+    search = Search(radius=RADIUS)
+    with pytest.raises(ValueError, match=r"x must have shape \(N, 2\) or \(B, N, 2\)"):
+        search.allocate(jnp.zeros((2,) + scene.x.shape[:1] + (3,)), scene.surface)
+    with pytest.raises(ValueError, match=r"x must have shape \(N, 2\)"):
+        search.allocate(scene.x[None, None], scene.surface)
 
 
 def test_dense_detectors_and_forces_map_over_a_batch():
@@ -132,18 +143,18 @@ def test_contact_forces_push_active_slaves_out_and_balance_on_the_master():
     assert float(on_master[0]) > 0
 
 
-def test_a_plan_with_nothing_near_still_records_cells_for_many_segments():
-    # plan_batch grows the first scene's plan with replan, which keeps its
-    # narrow phase: a first scene with nothing near a 400-segment die must not
-    # switch cells off for the whole batch.
+def test_a_batch_with_nothing_near_in_one_scene_still_bins_many_segments_in_cells():
+    # The batch's sizes are the largest of each scene's (``_sizes.largest``),
+    # which keeps the choice of narrow phase: a first scene with nothing near
+    # a 400-segment die must not switch cells off for the whole batch.
     scene = rough_die_scene(2_000, 400)
     far = scene.x.at[:, 1].add(100.0)
-    assert plan_buckets(far, scene.surface, radius=scene.radius).use_cells
-    plan = plan_batch(jnp.stack([far, scene.x]), scene.surface, radius=scene.radius)
-    assert plan.use_cells
+    assert measure(far, scene.surface, radius=scene.radius).use_cells
+    state = Search(radius=scene.radius).allocate(jnp.stack([far, scene.x]), scene.surface)
+    assert state.sizes.use_cells
 
 
-@pytest.mark.parametrize("detector", ["all_to_all", "bucket_sort"])
+@pytest.mark.parametrize("detector", ["all_to_all", "search"])
 def test_gradients_through_a_vmapped_detector_equal_a_loop(detector):
     # The searches run through custom_vmap (scene by scene) on stop_gradient
     # inputs; the gradients must still reach x and the master nodes.
@@ -155,26 +166,28 @@ def test_gradients_through_a_vmapped_detector_equal_a_loop(detector):
         jnp.stack([s.surface.nodes for s in scenes]),
         jnp.stack([s.surface.segments for s in scenes]),
     )
-    if detector == "bucket_sort":
-        plan = plan_batch(x, surface, radius=radius)
-        assert plan.use_cells
+    if detector == "search":
+        search = Search(radius=radius)
+        state = search.allocate(x, surface)
+        assert state.sizes.use_cells
 
-        def detect(x, s):
-            return bucket_sort(x, s, radius=radius, plan=plan)
+        def detect(state, x, s):
+            return search.closest(state, x, s)[0]
     else:
+        state = None
 
-        def detect(x, s):
+        def detect(state, x, s):
             return all_to_all(x, s, radius=radius)
 
-    def energy(x, nodes, segments):
-        contact = detect(x, Surface(nodes, segments))
+    def energy(state, x, nodes, segments):
+        contact = detect(state, x, Surface(nodes, segments))
         return jnp.sum(jnp.where(contact.found, contact.gap**2, 0))
 
-    batched = jax.jit(jax.vmap(jax.grad(energy, argnums=(0, 1))))(
-        x, surface.nodes, surface.segments
-    )
+    gradient = jax.grad(energy, argnums=(1, 2))
+    batched = jax.jit(jax.vmap(gradient))(state, x, surface.nodes, surface.segments)
     for i in range(len(scenes)):
-        single = jax.grad(energy, argnums=(0, 1))(x[i], surface.nodes[i], surface.segments[i])
+        one = jax.tree.map(lambda v, i=i: v[i], state)
+        single = gradient(one, x[i], surface.nodes[i], surface.segments[i])
         assert float(jnp.abs(single[0]).sum()) > 0 and float(jnp.abs(single[1]).sum()) > 0
         for got, want in zip(batched, single, strict=True):
             np.testing.assert_allclose(got[i], want, rtol=1e-10, atol=1e-12)

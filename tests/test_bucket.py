@@ -1,6 +1,13 @@
-"""bucket_sort and bucket_swept: equal to the dense detectors whenever overflow is False."""
+"""bucket_sort and bucket_swept: equal to the dense detectors whenever overflow is False.
+
+The one-call forms measure their sizes from concrete data; ``Search`` runs
+the same bucket sort under jit, vmap and grad with sizes allocated outside;
+the sized stages (``tests.helpers.sized_bucket_sort``) run it at sizes the
+test fixes, for the property tests and for sizes starved on purpose.
+"""
 
 import dataclasses
+import functools
 
 import hypothesis.extra.numpy as hnp
 import jax
@@ -11,25 +18,52 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from jaxcontact import (
-    BucketPlan,
+    Search,
+    Sizes,
     Surface,
-    _narrow,
+    _bucket,
     all_to_all,
     bucket_sort,
     bucket_swept,
-    candidates_expired,
-    find_candidates,
-    plan_buckets,
-    replan,
     swept,
 )
+from jaxcontact._sizes import CHUNK_ROWS, largest, measure
 from jaxcontact.scenes import cutting_scene, paper_scene, rough_die_scene
-from tests.helpers import assert_same_contact, assert_same_crossing
+from tests.helpers import (
+    assert_same_contact,
+    assert_same_crossing,
+    sized_bucket_sort,
+    sized_bucket_swept,
+)
 
-jit_bucket_sort = jax.jit(bucket_sort, static_argnames="plan")
-jit_bucket_swept = jax.jit(bucket_swept, static_argnames="plan")
+jit_sized_sort = jax.jit(sized_bucket_sort, static_argnames="sizes")
+jit_sized_swept = jax.jit(sized_bucket_swept, static_argnames="sizes")
 jit_all_to_all = jax.jit(all_to_all)
 jit_swept = jax.jit(swept)
+
+# ``search.closest`` jitted once for the module (the search is static), with
+# a record of its traces.
+TRACES = []
+
+
+@functools.partial(jax.jit, static_argnums=0)
+def search_step(search, state, x, surface):
+    TRACES.append(search)
+    return search.closest(state, x, surface)
+
+
+@functools.cache
+def allocated(name):
+    """(scene, search, state) of the float64 scenes the Search tests share:
+    one allocation (one compiled measure and find) each. Both bin the
+    segments in cells, where a Search with a skin keeps candidates."""
+    if name == "cutting":
+        scene = cutting_scene(3_000, 18.0, dtype=jnp.float64)
+        search = Search(radius=0.1, skin=0.05, method="binned", slack=2.0)
+    else:
+        scene = rough_die_scene(4_000, 400, dtype=jnp.float64)
+        search = Search(radius=0.02, skin=0.01, slack=2.0)
+    return scene, search, search.allocate(scene.x, scene.surface)
 
 
 SCENES = {
@@ -39,8 +73,9 @@ SCENES = {
     "paper": lambda dtype: paper_scene(40, dtype=dtype),
     "rough_die": lambda dtype: rough_die_scene(4_000, 400, dtype=dtype),
 }
-# Each scene in both dtypes with the plan's own choice of narrow phase, and the
-# small-tool scenes once more with cells forced on.
+# Each scene in both dtypes with the measured sizes' own choice of narrow
+# phase (the one-call form), and the small-tool scenes once more with cells
+# forced on (sized).
 CASES = [(name, dtype, None) for name in sorted(SCENES) for dtype in (jnp.float32, jnp.float64)]
 CASES += [("cutting_contact", jnp.float32, True), ("paper", jnp.float64, True)]
 
@@ -48,8 +83,12 @@ CASES += [("cutting_contact", jnp.float32, True), ("paper", jnp.float64, True)]
 @pytest.mark.parametrize("name, dtype, use_cells", CASES)
 def test_bucket_sort_equals_all_to_all_on_reference_scenes(name, dtype, use_cells):
     scene = SCENES[name](dtype)
-    plan = plan_buckets(scene.x, scene.surface, radius=scene.radius, use_cells=use_cells)
-    binned = jit_bucket_sort(scene.x, scene.surface, radius=scene.radius, plan=plan)
+    if use_cells is None:
+        binned = bucket_sort(scene.x, scene.surface, radius=scene.radius)
+    else:
+        sizes = measure(scene.x, scene.surface, radius=scene.radius, use_cells=use_cells)
+        assert sizes.use_cells
+        binned = sized_bucket_sort(scene.x, scene.surface, radius=scene.radius, sizes=sizes)
     dense = all_to_all(scene.x, scene.surface, radius=scene.radius)
     assert binned.gap.dtype == dtype
     assert_same_contact(binned, dense, scene.radius)
@@ -58,8 +97,12 @@ def test_bucket_sort_equals_all_to_all_on_reference_scenes(name, dtype, use_cell
 @pytest.mark.parametrize("name, dtype, use_cells", CASES)
 def test_bucket_swept_equals_swept_on_reference_scenes(name, dtype, use_cells):
     scene = SCENES[name](dtype)
-    plan = plan_buckets(scene.x, scene.surface, x_prev=scene.x_prev, use_cells=use_cells)
-    binned = jit_bucket_swept(scene.x_prev, scene.x, scene.surface, plan=plan)
+    if use_cells is None:
+        binned = bucket_swept(scene.x_prev, scene.x, scene.surface)
+    else:
+        sizes = measure(scene.x, scene.surface, x_prev=scene.x_prev, use_cells=use_cells)
+        assert sizes.use_cells
+        binned = sized_bucket_swept(scene.x_prev, scene.x, scene.surface, sizes=sizes)
     assert_same_crossing(binned, swept(scene.x_prev, scene.x, scene.surface))
 
 
@@ -71,90 +114,102 @@ def test_paper_scene_finds_contacts_and_crossings():
     assert int(crossing.crossed.sum()) > 0
 
 
-def test_tool_clear_of_workpiece_reports_nothing_and_keeps_tiny_plan():
+def test_tool_clear_of_workpiece_reports_nothing_and_keeps_tiny_sizes():
     scene = cutting_scene(3_000, 20.5)
-    plan = plan_buckets(scene.x, scene.surface, radius=scene.radius)
-    contact = jit_bucket_sort(scene.x, scene.surface, radius=scene.radius, plan=plan)
-    assert plan.block_capacity == 1
+    sizes = measure(scene.x, scene.surface, radius=scene.radius)
+    contact = sized_bucket_sort(scene.x, scene.surface, radius=scene.radius, sizes=sizes)
+    assert sizes.block_capacity == 1
     assert not bool(contact.found.any())
     assert not bool(contact.overflow)
     np.testing.assert_array_equal(contact.segment, -1)
 
 
-def test_too_small_block_capacity_sets_overflow_and_replan_fixes_it():
+def test_too_small_block_capacity_sets_overflow_and_larger_sizes_fix_it():
     far = cutting_scene(3_000, 20.5)
-    plan = plan_buckets(far.x, far.surface, radius=far.radius)
+    sizes = measure(far.x, far.surface, radius=far.radius)
     near = cutting_scene(3_000, 15.0)
-    contact = jit_bucket_sort(near.x, near.surface, radius=near.radius, plan=plan)
+    contact = sized_bucket_sort(near.x, near.surface, radius=near.radius, sizes=sizes)
     assert bool(contact.overflow)
-    bigger = replan(plan, near.x, near.surface, radius=near.radius)
-    assert bigger.block_capacity > plan.block_capacity
-    contact = jit_bucket_sort(near.x, near.surface, radius=near.radius, plan=bigger)
+    bigger = largest(sizes, measure(near.x, near.surface, radius=near.radius))
+    assert bigger.block_capacity > sizes.block_capacity
+    contact = sized_bucket_sort(near.x, near.surface, radius=near.radius, sizes=bigger)
     assert_same_contact(contact, all_to_all(near.x, near.surface, radius=near.radius), near.radius)
 
 
 def test_too_small_cell_capacity_sets_overflow():
     scene = rough_die_scene(4_000, 400)
-    plan = plan_buckets(scene.x, scene.surface, radius=scene.radius)
-    assert plan.use_cells
-    starved = dataclasses.replace(plan, cell_capacity=1)
-    contact = jit_bucket_sort(scene.x, scene.surface, radius=scene.radius, plan=starved)
+    sizes = measure(scene.x, scene.surface, radius=scene.radius)
+    assert sizes.use_cells
+    starved = dataclasses.replace(sizes, cell_capacity=1)
+    contact = sized_bucket_sort(scene.x, scene.surface, radius=scene.radius, sizes=starved)
     assert bool(contact.overflow)
 
 
 def test_too_small_span_sets_overflow():
     scene = rough_die_scene(4_000, 400)
-    plan = plan_buckets(scene.x, scene.surface, radius=scene.radius)
-    narrow = dataclasses.replace(plan, span=(1, 1), cell_size=plan.cell_size / 8)
-    contact = jit_bucket_sort(scene.x, scene.surface, radius=scene.radius, plan=narrow)
+    sizes = measure(scene.x, scene.surface, radius=scene.radius)
+    narrow = dataclasses.replace(sizes, span=(1, 1), cell_size=sizes.cell_size / 8)
+    contact = sized_bucket_sort(scene.x, scene.surface, radius=scene.radius, sizes=narrow)
     assert bool(contact.overflow)
 
 
-def test_plan_is_hashable_and_reused_without_retracing():
-    scene = cutting_scene(1_000, 18.0)
-    plan = plan_buckets(scene.x, scene.surface, radius=scene.radius)
-    assert hash(plan) == hash(dataclasses.replace(plan))
-    traces = []
-
-    @jax.jit
-    def detect(x, nodes):
-        traces.append(1)
-        return bucket_sort(x, Surface(nodes, scene.surface.segments), radius=0.1, plan=plan)
-
-    detect(scene.x, scene.surface.nodes)
-    detect(scene.x + 0.01, scene.surface.nodes - 0.5)
-    assert len(traces) == 1
+def test_sizes_and_search_are_hashable_and_reused_without_retracing():
+    scene, search, state = allocated("cutting")
+    assert hash(state.sizes) == hash(dataclasses.replace(state.sizes))
+    assert hash(search) == hash(dataclasses.replace(search))
+    search_step(search, state, scene.x, scene.surface)  # traced here, or already
+    traced = len(TRACES)
+    moved = scene.surface._replace(nodes=scene.surface.nodes - 0.5)
+    contact, state = search_step(search, state, scene.x + 0.01, moved)
+    search_step(search, state, scene.x, scene.surface)
+    assert len(TRACES) == traced
 
 
-def test_under_jit_without_plan_raises():
+def test_one_call_forms_under_a_transform_raise_naming_search():
     scene = cutting_scene(500, 18.0)
-    with pytest.raises(ValueError, match="plan"):
-        jax.jit(lambda x: bucket_sort(x, scene.surface, radius=0.1))(scene.x)
+
+    def contact(x):
+        return bucket_sort(x, scene.surface, radius=0.1)
+
+    def crossing(x):
+        return bucket_swept(scene.x_prev, x, scene.surface)
+
+    for transform in (jax.jit, jax.vmap):
+        with pytest.raises(ValueError, match="bucket_sort .*Search"):
+            transform(contact)(scene.x[None] if transform is jax.vmap else scene.x)
+    with pytest.raises(ValueError, match="bucket_sort .*Search"):
+        jax.grad(lambda x: jnp.sum(contact(x).gap))(scene.x)
+    with pytest.raises(ValueError, match="bucket_swept .*Search"):
+        jax.jit(crossing)(scene.x)
 
 
-def test_wrong_plan_raises():
-    scene = cutting_scene(500, 18.0)
-    plan = plan_buckets(scene.x, scene.surface, radius=0.1)
-    with pytest.raises(ValueError, match="plan was made for"):
-        bucket_sort(scene.x[:400], scene.surface, radius=0.1, plan=plan)
-    with pytest.raises(ValueError, match="other detector"):
-        bucket_swept(scene.x_prev, scene.x, scene.surface, plan=plan)
+def test_wrong_sizes_raise():
+    scene, search, state = allocated("cutting")
+    with pytest.raises(ValueError, match=f"made for {scene.x.shape[0]} slaves; x has 400 rows"):
+        search.closest(state, scene.x[:400], scene.surface)
+    with pytest.raises(ValueError, match="no path sizes"):
+        search.swept(state, scene.x_prev, scene.x, scene.surface)
+    with pytest.raises(ValueError, match="other query"):
+        sized_bucket_swept(scene.x_prev, scene.x, scene.surface, sizes=state.sizes)
     with pytest.raises(ValueError, match="radius"):
-        plan_buckets(scene.x, scene.surface)
+        measure(scene.x, scene.surface)
+    with pytest.raises(ValueError, match="x_prev"):
+        Search().allocate(scene.x, scene.surface)
 
 
 def test_vmap_over_scenes_equals_loop():
     scenes = [cutting_scene(800, tip) for tip in (15.0, 18.0, 20.5)]
     x = jnp.stack([s.x for s in scenes])
     nodes = jnp.stack([s.surface.nodes for s in scenes])
-    segments = scenes[0].surface.segments
-    plans = [plan_buckets(s.x, s.surface, radius=0.1) for s in scenes]
-    plan = max(plans, key=lambda p: p.block_capacity)
+    segments = jnp.stack([s.surface.segments for s in scenes])
+    search = Search(radius=0.1)
+    state = search.allocate(x, Surface(nodes, segments))
 
-    def detect(x, nodes):
-        return bucket_sort(x, Surface(nodes, segments), radius=0.1, plan=plan)
+    def detect(state, x, nodes, segments):
+        return search.closest(state, x, Surface(nodes, segments))[0]
 
-    batched = jax.vmap(detect)(x, nodes)
+    batched = jax.vmap(detect)(state, x, nodes, segments)
+    assert not bool(jnp.any(batched.overflow))
     for i, scene in enumerate(scenes):
         row = jax.tree.map(lambda v, i=i: v[i], batched)
         assert_same_contact(row, all_to_all(scene.x, scene.surface, radius=0.1), 0.1)
@@ -176,31 +231,36 @@ def test_masks_nan_padding_and_empty_inputs():
     assert not bool(bucket_sort(scene.x, none, radius=0.1).found.any())
 
 
-def test_gradients_through_bucket_sort_are_finite_and_match_dense():
-    scene = cutting_scene(600, 18.0, dtype=jnp.float64)
-    plan = plan_buckets(scene.x, scene.surface, radius=0.1)
+def test_gradients_through_the_bucket_sort_are_finite_and_match_dense():
+    scene, search, state = allocated("cutting")
 
-    def total(detector, x, nodes, **kwargs):
-        contact = detector(x, Surface(nodes, scene.surface.segments), radius=0.1, **kwargs)
+    def total(contact):
         return jnp.sum(jnp.where(contact.found, contact.gap, 0)) + jnp.sum(contact.point)
 
-    binned = jax.grad(lambda x, n: total(bucket_sort, x, n, plan=plan), argnums=(0, 1))
-    dense = jax.grad(lambda x, n: total(all_to_all, x, n), argnums=(0, 1))
+    def binned_total(x, nodes):
+        surface = Surface(nodes, scene.surface.segments)
+        return total(search.closest(state, x, surface)[0])
+
+    def dense_total(x, nodes):
+        return total(all_to_all(x, Surface(nodes, scene.surface.segments), radius=0.1))
+
+    binned = jax.grad(binned_total, argnums=(0, 1))
+    dense = jax.grad(dense_total, argnums=(0, 1))
     got_both = binned(scene.x, scene.surface.nodes)
     for got, want in zip(got_both, dense(scene.x, scene.surface.nodes), strict=True):
         assert bool(jnp.all(jnp.isfinite(got)))
         np.testing.assert_allclose(got, want, atol=1e-12)
 
 
-# Hypothesis scenes are padded to fixed shapes and use plans that differ only
+# Hypothesis scenes are padded to fixed shapes and use sizes that differ only
 # in the cell size, so each (dtype, cell size) compiles once.
 MAX_NODES, MAX_SLAVES = 24, 256
 CELL_SIZES = (0.05, 0.4, 3.0)
 
 
-def fixed_plan(cell_size, for_paths):
+def fixed_sizes(cell_size, for_paths):
     """Blocks of 8 with room for all; a 16 x 16 grid; spans and cells that cannot overflow."""
-    return BucketPlan(
+    return Sizes(
         num_slaves=MAX_SLAVES,
         block_size=8,
         block_capacity=MAX_SLAVES // 8,
@@ -244,8 +304,8 @@ def polyline_scenes(draw, dtype):
 )
 def test_bucket_sort_equals_all_to_all_on_random_polylines(scene, radius, cell_size):
     x, surface, mask = scene
-    plan = fixed_plan(cell_size, for_paths=False)
-    binned = jit_bucket_sort(x, surface, radius=radius, mask=mask, plan=plan)
+    sizes = fixed_sizes(cell_size, for_paths=False)
+    binned = jit_sized_sort(x, surface, radius=radius, mask=mask, sizes=sizes)
     assert_same_contact(
         binned, jit_all_to_all(x, surface, radius=radius, mask=mask), radius, degenerate=True
     )
@@ -259,48 +319,50 @@ def test_bucket_sort_equals_all_to_all_on_random_polylines(scene, radius, cell_s
 def test_bucket_swept_equals_swept_on_random_polylines(scene, move, cell_size):
     x_prev, surface, mask = scene
     x = x_prev + jnp.asarray(move, x_prev.dtype)[None]
-    plan = fixed_plan(cell_size, for_paths=True)
-    binned = jit_bucket_swept(x_prev, x, surface, mask=mask, plan=plan)
+    sizes = fixed_sizes(cell_size, for_paths=True)
+    binned = jit_sized_swept(x_prev, x, surface, mask=mask, sizes=sizes)
     assert_same_crossing(binned, jit_swept(x_prev, x, surface, mask=mask), degenerate=True)
 
 
-def test_plan_fields():
+def test_sizes_fields():
     scene = rough_die_scene(4_000, 400)
-    plan = plan_buckets(scene.x, scene.surface, radius=scene.radius)
-    assert isinstance(plan, BucketPlan)
-    assert plan.slave_capacity == plan.block_capacity * plan.block_size
-    assert plan.grid_shape[0] > 1 and plan.cell_capacity >= 1
+    sizes = measure(scene.x, scene.surface, radius=scene.radius)
+    assert isinstance(sizes, Sizes)
+    assert sizes.slave_capacity == sizes.block_capacity * sizes.block_size
+    assert sizes.grid_shape[0] > 1 and sizes.cell_capacity >= 1
+    assert sizes.chunk_rows == CHUNK_ROWS
 
 
 @pytest.mark.parametrize("name", ["cutting", "rough_die"])
 def test_candidates_reused_over_steps_equal_a_fresh_search_until_expired(name):
-    """The tool advances step by step; candidates found once serve while within the skin."""
-    radius, skin = (0.1, 0.05) if name == "cutting" else (0.02, 0.01)
-    if name == "cutting":
-        scene = cutting_scene(3_000, 18.0, dtype=jnp.float64)
-    else:
-        scene = rough_die_scene(4_000, 400, dtype=jnp.float64)
-    plan = plan_buckets(scene.x, scene.surface, radius=radius + skin, slack=2.0)
-    near = find_candidates(scene.x, scene.surface, radius=radius, skin=skin, plan=plan)
+    """The tool advances step by step; candidates found once serve while within
+    the skin, and are found again (inside the step) once it is exceeded."""
+    scene, search, state = allocated(name)
+    radius, skin = search.radius, search.skin
+    found = state.candidates
     step = jnp.asarray([-0.4 * skin, 0.0])
     for count in range(1, 4):
         surface = scene.surface._replace(nodes=scene.surface.nodes + count * step[None])
-        expired = bool(candidates_expired(near, scene.x, surface))
+        expired = bool(_bucket.expired(found, scene.x, surface, None, skin))
         assert expired == (count * 0.4 * skin > skin)
+        contact, state = search_step(search, state, scene.x, surface)
+        assert int(state.rebuilds) == int(expired)
+        assert_same_contact(contact, all_to_all(scene.x, surface, radius=radius), radius)
         if expired:
             break
-        reused = jit_bucket_sort(scene.x, surface, radius=radius, plan=plan, candidates=near)
-        assert_same_contact(reused, all_to_all(scene.x, surface, radius=radius), radius)
     assert expired, "the test should have run the candidates out"
+    assert not bool(state.overflow)
 
 
 def test_expired_candidates_can_miss_contacts_which_is_why_the_check_exists():
     scene = cutting_scene(3_000, 20.3)
-    plan = plan_buckets(scene.x, scene.surface, radius=0.15, slack=2.0)
-    near = find_candidates(scene.x, scene.surface, radius=0.1, skin=0.05, plan=plan)
+    search = Search(radius=0.1, skin=0.05, method="binned", slack=2.0)
+    state = search.allocate(scene.x, scene.surface)
     moved = scene.surface._replace(nodes=scene.surface.nodes.at[:, 0].add(-1.5))
-    assert bool(candidates_expired(near, scene.x, moved))
-    stale = bucket_sort(scene.x, moved, radius=0.1, plan=plan, candidates=near)
+    assert bool(_bucket.expired(state.candidates, scene.x, moved, None, search.skin))
+    stale = sized_bucket_sort(
+        scene.x, moved, radius=0.1, sizes=state.sizes, candidates=state.candidates
+    )
     fresh = all_to_all(scene.x, moved, radius=0.1)
     assert int(fresh.found.sum()) > int(stale.found.sum())
 
@@ -319,10 +381,12 @@ def test_bucket_swept_ignores_a_nan_previous_position_like_swept():
 
 def test_reused_candidates_skip_a_segment_masked_since():
     scene = rough_die_scene(2_000, 100, dtype=jnp.float64)
-    plan = plan_buckets(scene.x, scene.surface, radius=0.03, use_cells=True)
-    near = find_candidates(scene.x, scene.surface, radius=0.02, skin=0.01, plan=plan)
+    search = Search(radius=0.02, skin=0.01, method="binned")
+    state = search.allocate(scene.x, scene.surface)
+    assert state.sizes.use_cells
     masked = scene.surface._replace(mask=jnp.arange(100) % 3 != 0)
-    reused = bucket_sort(scene.x, masked, radius=0.02, plan=plan, candidates=near)
+    reused, state = search.closest(state, scene.x, masked)
+    assert int(state.rebuilds) == 0  # masking a segment keeps the candidates
     assert_same_contact(reused, all_to_all(scene.x, masked, radius=0.02), 0.02)
 
 
@@ -345,45 +409,51 @@ def test_a_masked_padding_segment_does_not_change_a_vertex_tie():
     assert float(plain.gap[0]) > 0
 
 
-def test_plan_rejects_a_non_positive_cell_factor_and_replan_takes_keywords():
+def test_measure_rejects_a_non_positive_cell_factor_and_largest_merges_sizes():
     scene = rough_die_scene(2_000, 100)
     with pytest.raises(ValueError, match="cell_factor"):
-        plan_buckets(scene.x, scene.surface, radius=0.02, cell_factor=0.0)
-    plan = plan_buckets(scene.x, scene.surface, radius=0.02)
-    bigger = replan(plan, scene.x, scene.surface, radius=0.02, slack=3.0, use_cells=True)
-    assert bigger.cell_capacity >= plan.cell_capacity
+        measure(scene.x, scene.surface, radius=0.02, cell_factor=0.0)
+    sizes = measure(scene.x, scene.surface, radius=0.02)
+    more = measure(scene.x, scene.surface, radius=0.02, slack=3.0, use_cells=True)
+    bigger = largest(sizes, more)
+    assert bigger.use_cells and bigger.cell_capacity >= sizes.cell_capacity
+    assert bigger.cell_capacity >= more.cell_capacity
+    assert bigger.block_capacity == max(sizes.block_capacity, more.block_capacity)
+    paths = measure(scene.x, scene.surface, x_prev=scene.x_prev)
+    with pytest.raises(ValueError, match="different searches"):
+        largest(sizes, paths)
 
 
 @pytest.mark.parametrize("detector", ["bucket_sort", "bucket_swept", "reused"])
-def test_kept_slaves_searched_in_chunks_longest_lists_first_equal_dense(monkeypatch, detector):
-    # Above _narrow._CHUNK kept slaves, the cell search sorts them by list
-    # length and stops at the first chunk of empty lists. A chunk of 64 rows
-    # puts the rough die's 2,496 kept slaves in 39 chunks: full, partly empty
-    # and empty ones, with masked slaves and NaN rows among them.
-    monkeypatch.setattr(_narrow, "_CHUNK", 64)
-    jax.clear_caches()  # programs traced with the default chunk must not be reused
-    try:
-        scene = rough_die_scene(4_000, 400, dtype=jnp.float64)
-        x = scene.x.at[7].set(jnp.nan)
-        mask = jnp.asarray(np.arange(x.shape[0]) % 11 != 5)
-        if detector == "bucket_swept":
-            x_prev = x + jnp.asarray([[0.01, 0.03]])
-            plan = plan_buckets(x, scene.surface, x_prev=x_prev, mask=mask)
-            assert plan.use_cells and plan.slave_capacity > 64
-            got = jit_bucket_swept(x_prev, x, scene.surface, mask=mask, plan=plan)
-            assert int(got.crossed.sum()) > 0
-            assert_same_crossing(got, swept(x_prev, x, scene.surface, mask=mask))
-            return
-        plan = plan_buckets(x, scene.surface, radius=scene.radius, mask=mask)
-        assert plan.use_cells and plan.slave_capacity > 64
-        near = None
-        if detector == "reused":
-            near = find_candidates(x, scene.surface, radius=scene.radius, skin=0.0, plan=plan)
-        got = jit_bucket_sort(
-            x, scene.surface, radius=scene.radius, mask=mask, plan=plan, candidates=near
+def test_kept_slaves_searched_in_chunks_longest_lists_first_equal_dense(detector):
+    # Above ``Sizes.chunk_rows`` kept slaves, the cell search sorts them by
+    # list length and stops at the first chunk of empty lists. A chunk of 64
+    # rows puts the rough die's 2,496 kept slaves in 39 chunks: full, partly
+    # empty and empty ones, with masked slaves and NaN rows among them.
+    scene = rough_die_scene(4_000, 400, dtype=jnp.float64)
+    x = scene.x.at[7].set(jnp.nan)
+    mask = jnp.asarray(np.arange(x.shape[0]) % 11 != 5)
+    if detector == "bucket_swept":
+        x_prev = x + jnp.asarray([[0.01, 0.03]])
+        sizes = measure(x, scene.surface, x_prev=x_prev, mask=mask, chunk_rows=64)
+        assert sizes.use_cells and sizes.slave_capacity > sizes.chunk_rows == 64
+        got = sized_bucket_swept(x_prev, x, scene.surface, mask=mask, sizes=sizes)
+        assert int(got.crossed.sum()) > 0
+        assert_same_crossing(got, swept(x_prev, x, scene.surface, mask=mask))
+        return
+    if detector == "reused":
+        # Candidates found at allocate (with a skin) and reused: nothing has moved.
+        search = Search(radius=scene.radius, skin=scene.radius / 2, chunk_rows=64)
+        state = search.allocate(x, scene.surface, mask=mask)
+        sizes = state.sizes
+        got, state = search.closest(state, x, scene.surface, mask=mask)
+        assert state.candidates is not None and int(state.rebuilds) == 0
+    else:
+        sizes = dataclasses.replace(
+            measure(x, scene.surface, radius=scene.radius, mask=mask), chunk_rows=64
         )
-        want = all_to_all(x, scene.surface, radius=scene.radius, mask=mask)
-        assert int(want.found.sum()) > 0
-        assert_same_contact(got, want, scene.radius)
-    finally:
-        jax.clear_caches()
+        got = sized_bucket_sort(x, scene.surface, radius=scene.radius, mask=mask, sizes=sizes)
+    assert sizes.use_cells and sizes.slave_capacity > sizes.chunk_rows == 64
+    want = all_to_all(x, scene.surface, radius=scene.radius, mask=mask)
+    assert int(want.found.sum()) > 0
+    assert_same_contact(got, want, scene.radius)

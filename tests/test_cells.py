@@ -5,7 +5,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from jaxcontact._cells import stable_order
+from jaxcontact._sort import stable_order
 
 
 @settings(max_examples=40, deadline=None)

@@ -16,8 +16,9 @@ import numpy as np
 import pytest
 
 import jaxcontact
-from jaxcontact import BucketPlan, Surface
+from jaxcontact import Sizes, Surface
 from tests.exact_checks import ULPS, Scene, check_contact
+from tests.helpers import sized_bucket_sort
 
 # An L, counter-clockwise: convex corners and one concave corner, at (1, 1).
 L_NODES = np.array([[0, 0], [2, 0], [2, 1], [1, 1], [1, 2], [0, 2]], np.float64)
@@ -46,8 +47,8 @@ PATHS = _paths()
 STEPS = np.linalg.norm(np.diff(PATHS.reshape(4, SAMPLES, 2), axis=1), axis=-1)  # f64[4, S - 1]
 
 
-def _plan(use_cells):
-    return BucketPlan(
+def _sizes(use_cells):
+    return Sizes(
         num_slaves=len(PATHS),
         block_size=32,
         block_capacity=len(PATHS) // 32,
@@ -61,9 +62,9 @@ def _plan(use_cells):
 
 DETECTORS = {
     "all_to_all": jax.jit(lambda x, s: jaxcontact.all_to_all(x, s, radius=4.0)),
-    "bucket_sort": jax.jit(lambda x, s: jaxcontact.bucket_sort(x, s, radius=4.0, plan=_plan(0))),
+    "bucket_sort": jax.jit(lambda x, s: sized_bucket_sort(x, s, radius=4.0, sizes=_sizes(False))),
     "bucket_sort_cells": jax.jit(
-        lambda x, s: jaxcontact.bucket_sort(x, s, radius=4.0, plan=_plan(1))
+        lambda x, s: sized_bucket_sort(x, s, radius=4.0, sizes=_sizes(True))
     ),
 }
 NAMES = pytest.mark.parametrize("name", sorted(DETECTORS))

@@ -24,19 +24,19 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 import jaxcontact
-from jaxcontact import BucketPlan, Surface
+from jaxcontact import Sizes, Surface
 from tests import oracle
 from tests.exact_checks import ULPS, Scene, check_contact, check_crossing
-from tests.helpers import assert_all_finite, blind_spot
+from tests.helpers import assert_all_finite, blind_spot, sized_bucket_sort, sized_bucket_swept
 
 NUM_SLAVES = 16
-NUM_SEGMENTS = 56  # above the 48 where bucket_sort's own plans switch to cells
+NUM_SEGMENTS = 56  # above the 48 where bucket_sort's own sizes switch to cells
 NUM_NODES = NUM_SEGMENTS + 1
 
 
-def _plan(use_cells: bool, for_paths: bool) -> BucketPlan:
-    """A plan that cannot overflow at the fixed shape: every block, every segment per cell."""
-    return BucketPlan(
+def _sizes(use_cells: bool, for_paths: bool) -> Sizes:
+    """Sizes that cannot overflow at the fixed shape: every block, every segment per cell."""
+    return Sizes(
         num_slaves=NUM_SLAVES,
         block_size=8,
         block_capacity=NUM_SLAVES // 8,
@@ -50,13 +50,13 @@ def _plan(use_cells: bool, for_paths: bool) -> BucketPlan:
 
 
 def _bucket_sort(cells):
-    plan = _plan(cells, for_paths=False)
-    return jax.jit(lambda x, s, r, m: jaxcontact.bucket_sort(x, s, radius=r, mask=m, plan=plan))
+    sizes = _sizes(cells, for_paths=False)
+    return jax.jit(lambda x, s, r, m: sized_bucket_sort(x, s, radius=r, mask=m, sizes=sizes))
 
 
 def _bucket_swept(cells):
-    plan = _plan(cells, for_paths=True)
-    return jax.jit(lambda p, x, s, m: jaxcontact.bucket_swept(p, x, s, mask=m, plan=plan))
+    sizes = _sizes(cells, for_paths=True)
+    return jax.jit(lambda p, x, s, m: sized_bucket_swept(p, x, s, mask=m, sizes=sizes))
 
 
 # One jitted function per detector, shared by every example (one compilation per dtype).
@@ -267,9 +267,9 @@ def test_crossing_matches_exact_oracle_at_hard_places(name, dtype, data):
     check_bad_rows_ignored(run, crossing, rows, "crossed")
 
 
-def test_plain_bucket_calls_plan_themselves_with_and_without_cells():
-    # Outside jit the bucket detectors plan for themselves: with NUM_SEGMENTS
-    # (> 48) segments that plan bins them in cells, with a few it does not.
+def test_plain_bucket_calls_measure_their_sizes_with_and_without_cells():
+    # The one-call bucket detectors measure their own sizes: with NUM_SEGMENTS
+    # (> 48) segments those bin them in cells, with a few they do not.
     scene = Scene(
         x_prev=np.zeros((NUM_SLAVES, 2)),
         x=np.linspace([-1.0, -0.5], [2.0, 0.75], NUM_SLAVES),

@@ -1,4 +1,4 @@
-"""The ploughing simulation: sanity and energy checks, plan reuse, gradients, the demo.
+"""The ploughing simulation: sanity and energy checks, candidate reuse, gradients, the demo.
 
 One small float64 run (a 2,997-node workpiece, 156 steps, the tool in
 contact for most of them) is shared by the checks; each other configuration
@@ -14,9 +14,9 @@ import numpy as np
 import pytest
 
 from jaxcontact import _cli
-from jaxcontact.sim.demo import run_demo
 from jaxcontact.scenes import cutting_tool_outline
 from jaxcontact.sim import mean_cutting_force, ploughing, run, simulate, tool_outline
+from jaxcontact.sim.demo import run_demo
 
 # The stated bound on penetration, as a fraction of the grid spacing (the
 # search radius): the default penalty (10 E per node) keeps it below this.
@@ -88,35 +88,39 @@ def test_workpiece_energy_never_exceeds_the_work_done(small):
 
 def test_penetration_stays_small_and_nothing_is_nan(small):
     *_, config, final, history = small
-    assert history.penetration.max() < PENETRATION_FRACTION * config.radius
+    assert history.penetration.max() < PENETRATION_FRACTION * config.search.radius
     for leaf in jax.tree.leaves((final, history)):
         assert np.isfinite(np.asarray(leaf, np.float64)).all()
 
 
-def test_candidate_lists_are_reused(small):
+def test_the_small_tool_searches_afresh_every_step(small):
+    # The 20-segment tool is searched without cells, where a Search keeps no
+    # candidates: the whole bucket sort runs every step, and nothing is
+    # found again. (Reuse with cells is the next test's.)
     _, _, config, final, history = small
-    # Found again only every few steps, and the count is the flags'.
-    assert 1 <= int(final.rebuilds) <= config.steps // 3
-    assert int(final.rebuilds) == history.rebuilt.sum()
+    assert config.search.skin > 0 and not config.sizes.use_cells
+    assert int(final.rebuilds) == 0 == history.rebuilt.sum()
 
 
-def test_reuse_surface_slaves_and_replanning_change_nothing(small):
+def test_reuse_surface_slaves_and_growing_sizes_change_nothing(small):
     # One run (one compilation) against the shared one: every node a slave,
-    # a skin of 0 (lists found again at every step) and a plan too small,
-    # which ``run`` flags after the run and ``simulate`` replaces. The same
-    # forces: reusing lists, taking only surface slaves and replanning miss
-    # nothing here.
+    # the tool binned in cells, so that candidate lists are found within
+    # ``radius + skin`` and reused, and sizes too small, which ``run`` flags
+    # after the run and ``simulate`` grows. The same forces: reusing lists,
+    # taking only surface slaves and growing the sizes miss nothing here.
     mesh, controls, config, _, history = small
     _, _, every_node = ploughing(3_000, travel=0.2, dtype=jnp.float64, slaves="all")
     cramped = dataclasses.replace(
         every_node,
-        skin=0.0,
-        plan=dataclasses.replace(every_node.plan, block_size=8, block_capacity=1),
+        search=dataclasses.replace(every_node.search, method="binned"),
+        sizes=dataclasses.replace(every_node.sizes, use_cells=True, block_size=8, block_capacity=1),
     )
     assert bool(run(mesh, controls, cramped)[0].overflow)
     final, history_again, held = simulate(mesh, controls, cramped)
-    assert not bool(final.overflow) and held.plan.block_capacity > 1
-    assert int(final.rebuilds) == config.steps
+    assert not bool(final.overflow) and held.sizes.block_capacity > 1 and held.sizes.use_cells
+    # Found again only every few steps, and the count is the flags'.
+    assert 1 <= int(final.rebuilds) <= config.steps // 3
+    assert int(final.rebuilds) == history_again.rebuilt.sum()
     np.testing.assert_array_equal(history_again.active, history.active)
     np.testing.assert_allclose(history_again.force, history.force, rtol=1e-9, atol=1e-6)
 
@@ -148,7 +152,8 @@ def test_demo_without_plots():
     # The shared run's set-up, so its compiled scan is reused.
     summary, _ = run_demo(3_000, 0.2, repeats=1, dtype=np.float64)
     assert summary.steps > 0 and summary.steps_per_s > 0
-    assert summary.detection_share < 1 and summary.rebuilds >= 1
+    # The 20-segment tool keeps no candidate lists: none are found again.
+    assert summary.detection_share < 1 and summary.rebuilds == 0
     assert summary.most_active >= 1 and summary.mean_force[0] > 0
     assert summary.penetration_ratio < PENETRATION_FRACTION
 

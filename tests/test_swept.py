@@ -1,4 +1,4 @@
-"""``swept`` against the brute-force oracle, and each special case of API.md."""
+"""``swept`` against the brute-force oracle, and each special case of docs/contract.md."""
 
 import jax
 import jax.numpy as jnp

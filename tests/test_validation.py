@@ -1,5 +1,6 @@
 """Bad inputs raise ``ValueError`` naming the argument, at trace time where they can."""
 
+import functools
 import re
 
 import jax
@@ -8,7 +9,8 @@ import numpy as np
 import pytest
 
 import jaxcontact
-from jaxcontact import Surface
+from jaxcontact import Search, Surface
+from jaxcontact._sizes import measure
 
 X = np.array([[0.5, 0.25], [1.5, -0.5]])
 NODES = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]])
@@ -149,47 +151,65 @@ def test_bad_concrete_value_raises_naming_the_argument(case):
         call()
 
 
+@functools.cache
+def allocated(radius):
+    """A ``Search`` and its state for ``X`` and ``SURFACE``, closest points and
+    paths: the bucket detectors under jit."""
+    search = Search(radius=radius)
+    return search, search.allocate(X, SURFACE, x_prev=X)
+
+
 @pytest.mark.parametrize("bad", [[1, 3], [-1, 2], [7, -5]])
 def test_segment_index_out_of_range_under_jit_is_not_a_segment(bad):
     # Under jit the indices cannot be checked; the gather would clamp them to
     # real nodes and make up a segment. That segment is ignored instead, and
-    # the other rows are as without it.
+    # the other rows are as without it. (The search state is made inside, for
+    # the surface at hand, with the sizes allocated for the good one.)
     segments = jnp.asarray([[0, 1], bad], jnp.int32)
     surface = SURFACE._replace(segments=segments)
     only_good = Surface(SURFACE.nodes, segments[:1])
-    plan = jaxcontact.plan_buckets(X, SURFACE, radius=2.0)
-    paths = jaxcontact.plan_buckets(X, SURFACE, x_prev=X[::-1])
+    search, state = allocated(2.0)
     for detect in (
         jax.jit(lambda s: jaxcontact.all_to_all(X, s, radius=2.0)),
         jax.jit(lambda s: jaxcontact.swept(X, X[::-1], s)),
-        jax.jit(lambda s: jaxcontact.bucket_sort(X, s, radius=2.0, plan=plan)),
-        jax.jit(lambda s: jaxcontact.bucket_swept(X[::-1], X, s, plan=paths)),
+        jax.jit(lambda s: search.closest(search.init(X, s, sizes=state.sizes), X, s)[0]),
+        jax.jit(lambda s: search.swept(state, X[::-1], X, s)[0]),
     ):
         got, expected = detect(surface), detect(only_good)
         for field, value in zip(got._fields, got, strict=True):
             np.testing.assert_array_equal(value, getattr(expected, field), err_msg=field)
 
 
-# Every public detector, plain and under jit (the bucket ones with a plan made
-# for the good inputs), for the bad inputs the issue lists.
+# Every public detector, plain and under jit (the bucket ones under jit as a
+# ``Search`` with a state allocated outside for the good inputs), for the bad
+# inputs the issue lists; and ``Search.allocate``, plain (it measures on the
+# host).
 def _detectors(transform):
-    plan = jaxcontact.plan_buckets(X, SURFACE, radius=0.5)
-    paths = jaxcontact.plan_buckets(X, SURFACE, x_prev=X)
-    jit_plan = {"plan": plan} if transform is jax.jit else {}
-    jit_paths = {"plan": paths} if transform is jax.jit else {}
+    jitted = transform is jax.jit
+    search, state = allocated(0.5)
+
+    def bucket_sort(x, s, m=None):
+        if jitted:
+            return search.closest(state, x, s, mask=m)[0]
+        return jaxcontact.bucket_sort(x, s, radius=0.5, mask=m)
+
+    def bucket_swept(x, s, m=None):
+        if jitted:
+            return search.swept(state, x, x, s, mask=m)[0]
+        return jaxcontact.bucket_swept(x, x, s, mask=m)
+
     return {
         "all_to_all": lambda x, s, m=None: jaxcontact.all_to_all(x, s, radius=0.5, mask=m),
-        "bucket_sort": lambda x, s, m=None: jaxcontact.bucket_sort(
-            x, s, radius=0.5, mask=m, **jit_plan
-        ),
+        "bucket_sort": bucket_sort,
         "swept": lambda x, s, m=None: jaxcontact.swept(x, x, s, mask=m),
-        "bucket_swept": lambda x, s, m=None: jaxcontact.bucket_swept(x, x, s, mask=m, **jit_paths),
+        "bucket_swept": bucket_swept,
+        "allocate": lambda x, s, m=None: search.allocate(x, s, mask=m),
+        "allocate_paths": lambda x, s, m=None: search.allocate(x, s, x_prev=x, mask=m),
     }
 
 
-DETECTORS = pytest.mark.parametrize(
-    "detector", ["all_to_all", "bucket_sort", "swept", "bucket_swept"]
-)
+DETECTORS = ("all_to_all", "bucket_sort", "swept", "bucket_swept")
+ALLOCATE = ("allocate", "allocate_paths")
 
 # (argument the message must start with, x, surface, mask) of each bad call.
 BAD_FOR_EVERY_DETECTOR = {
@@ -212,19 +232,39 @@ BAD_FOR_EVERY_DETECTOR = {
 }
 
 
-@TRANSFORMS
-@DETECTORS
-@pytest.mark.parametrize("case", list(BAD_FOR_EVERY_DETECTOR))
+# Search.allocate is plain only: under jit it refuses any input (it measures
+# on the host). A rank-3 x is a batch of scenes to it, not an error.
+NAMING_CASES = [
+    (transform, detector, case)
+    for transform in ("plain", "jit")
+    for detector in DETECTORS
+    for case in BAD_FOR_EVERY_DETECTOR
+] + [
+    ("plain", detector, case)
+    for detector in ALLOCATE
+    for case in BAD_FOR_EVERY_DETECTOR
+    if case != "x_rank_3"
+]
+
+
+@pytest.mark.parametrize("transform, detector, case", NAMING_CASES)
 def test_every_detector_names_the_bad_argument(case, detector, transform):
     name, x, surface, mask = BAD_FOR_EVERY_DETECTOR[case]
+    transform = jax.jit if transform == "jit" else (lambda f: f)
     call = _detectors(transform)[detector]
-    if name == "x" and detector.endswith("swept"):
+    if name == "x" and detector.endswith(("swept", "paths")):
         name = "x_prev"  # the bad x is passed as both ends of the paths
     with pytest.raises(ValueError, match=rf"^{re.escape(name)}\b(?!\.)"):
         transform(call)(x, surface, mask)
 
 
-@DETECTORS
+def test_search_allocate_under_jit_raises_naming_search():
+    search, _ = allocated(0.5)
+    with pytest.raises(ValueError, match="Search.allocate .*concrete"):
+        jax.jit(lambda x: search.allocate(x, SURFACE))(X)
+
+
+@pytest.mark.parametrize("detector", DETECTORS + ALLOCATE)
 @pytest.mark.parametrize("bad", [[[0, 1], [1, 3]], [[0, 1], [-1, 2]]], ids=["high", "negative"])
 def test_every_detector_rejects_concrete_segment_indices_out_of_range(detector, bad):
     surface = SURFACE._replace(segments=np.asarray(bad, np.int32))
@@ -233,15 +273,12 @@ def test_every_detector_rejects_concrete_segment_indices_out_of_range(detector, 
 
 
 @pytest.mark.parametrize("radius", [-1.0, np.nan, np.inf])
-@pytest.mark.parametrize("detector", ["bucket_sort", "plan_buckets", "find_candidates"])
+@pytest.mark.parametrize("detector", ["bucket_sort", "measure", "Search"])
 def test_bucket_functions_reject_bad_radius(detector, radius):
-    plan = jaxcontact.plan_buckets(X, SURFACE, radius=0.5)
     calls = {
         "bucket_sort": lambda: jaxcontact.bucket_sort(X, SURFACE, radius=radius),
-        "plan_buckets": lambda: jaxcontact.plan_buckets(X, SURFACE, radius=radius),
-        "find_candidates": lambda: jaxcontact.find_candidates(
-            X, SURFACE, radius=radius, skin=0.1, plan=plan
-        ),
+        "measure": lambda: measure(X, SURFACE, radius=radius),
+        "Search": lambda: Search(radius=radius),
     }
     with pytest.raises(ValueError, match=r"^radius\b"):
         calls[detector]()
@@ -250,23 +287,31 @@ def test_bucket_functions_reject_bad_radius(detector, radius):
 EMPTY = Surface(jnp.zeros((0, 2)), jnp.zeros((0, 2), jnp.int32))
 
 
-@TRANSFORMS
-@DETECTORS
+EMPTY_CASES = [(transform, detector) for transform in ("plain", "jit") for detector in DETECTORS]
+# A search that keeps candidates (a skin and cells) on empty inputs.
+EMPTY_CASES += [("jit", "bucket_sort_with_skin")]
+
+
+@pytest.mark.parametrize("transform, detector", EMPTY_CASES)
 @pytest.mark.parametrize("empty", ["slaves", "segments", "both"])
 def test_every_detector_takes_empty_inputs(empty, detector, transform):
     x = X[:0] if empty in ("slaves", "both") else X
     surface = EMPTY if empty in ("segments", "both") else SURFACE
-    if transform is jax.jit and detector.startswith("bucket"):
-        # The plan is made for the shapes at hand.
-        kind = {"radius": 0.5} if detector == "bucket_sort" else {"x_prev": x}
-        plan = jaxcontact.plan_buckets(x, surface, **kind)
-        call = {
-            "bucket_sort": lambda x, s: jaxcontact.bucket_sort(x, s, radius=0.5, plan=plan),
-            "bucket_swept": lambda x, s: jaxcontact.bucket_swept(x, x, s, plan=plan),
-        }[detector]
+    if transform == "jit" and detector.startswith("bucket"):
+        # The search is allocated for the shapes at hand; with a skin and
+        # cells it keeps candidates (found at allocate, reused under jit).
+        skin, method = (0.1, "binned") if detector.endswith("skin") else (0.0, "auto")
+        radius = None if detector == "bucket_swept" else 0.5
+        search = Search(radius=radius, skin=skin, method=method)
+        state = search.allocate(x, surface, x_prev=x)
+
+        def call(x, s):
+            if detector == "bucket_swept":
+                return search.swept(state, x, x, s)[0]
+            return search.closest(state, x, s)[0]
     else:
-        call = _detectors(transform)[detector]
-    result = transform(call)(x, surface)
+        call = _detectors(lambda f: f)[detector]
+    result = (jax.jit(call) if transform == "jit" else call)(x, surface)
     assert result.segment.shape == (len(x),)
     assert (np.asarray(result.segment) == -1).all()
     assert not bool(result.overflow)

@@ -14,15 +14,15 @@ from jax.sharding import NamedSharding
 from jax.sharding import PartitionSpec as P
 
 from jaxcontact import (
+    _bucket,
     all_to_all,
     bucket_sort,
     bucket_swept,
     contact_forces,
-    plan_buckets,
-    plan_sharded,
     sharded,
     swept,
 )
+from jaxcontact._sizes import CELLS_ABOVE, measure
 from jaxcontact.scenes import cutting_scene, rough_die_scene
 from tests.helpers import assert_same_contact, assert_same_crossing
 
@@ -42,7 +42,9 @@ def _scene(num_nodes, dtype=jnp.float32):
 
 # cutting_scene rounds to a grid: 1,000 nodes give 992 rows, split evenly;
 # 1,100 give 1,105, which need padding. Each size once and each dtype once:
-# a case compiles three programs for 4 devices (15-20 s on 2 cores).
+# a case compiles three programs for 4 devices (15-20 s on 2 cores). The
+# bucket detectors measure one device's sizes from the data themselves, so
+# they are called plainly, not under jit (sharded compiles them).
 @pytest.mark.parametrize("num_nodes, dtype", [(1_000, jnp.float32), (1_100, jnp.float64)])
 def test_sharded_contact_equals_one_device(mesh, num_nodes, dtype):
     scene = _scene(num_nodes, dtype)
@@ -51,10 +53,7 @@ def test_sharded_contact_equals_one_device(mesh, num_nodes, dtype):
     dense = jax.jit(sharded(all_to_all, mesh))(scene.x, scene.surface, radius=RADIUS, mask=mask)
     for field, value in zip(one._fields, one, strict=True):
         np.testing.assert_array_equal(getattr(dense, field), value, err_msg=field)
-    plan = plan_sharded(scene.x, scene.surface, DEVICES, radius=RADIUS, mask=mask)
-    binned = jax.jit(sharded(bucket_sort, mesh), static_argnames="plan")(
-        scene.x, scene.surface, radius=RADIUS, mask=mask, plan=plan
-    )
+    binned = sharded(bucket_sort, mesh)(scene.x, scene.surface, radius=RADIUS, mask=mask)
     assert_same_contact(binned, one, RADIUS)
     if scene.x.shape[0] % DEVICES == 0:
         assert dense.gap.sharding.spec == P("slaves")
@@ -69,32 +68,40 @@ def test_sharded_crossing_equals_one_device(mesh, num_nodes):
     dense = jax.jit(sharded(swept, mesh))(scene.x_prev, scene.x, scene.surface)
     for field, value in zip(one._fields, one, strict=True):
         np.testing.assert_array_equal(getattr(dense, field), value, err_msg=field)
-    plan = plan_sharded(scene.x, scene.surface, DEVICES, x_prev=scene.x_prev)
-    binned = jax.jit(sharded(bucket_swept, mesh), static_argnames="plan")(
-        scene.x_prev, scene.x, scene.surface, plan=plan
-    )
+    binned = sharded(bucket_swept, mesh)(scene.x_prev, scene.x, scene.surface)
     assert_same_crossing(binned, one)
 
 
 def test_sharded_bucket_sort_with_cells_on_the_rough_die(mesh):
     scene = rough_die_scene(4_000, 400)
-    plan = plan_sharded(scene.x, scene.surface, DEVICES, radius=scene.radius)
-    assert plan.use_cells
-    binned = jax.jit(sharded(bucket_sort, mesh), static_argnames="plan")(
-        scene.x, scene.surface, radius=scene.radius, plan=plan
-    )
+    assert scene.surface.segments.shape[0] > CELLS_ABOVE  # the measured sizes bin in cells
+    binned = sharded(bucket_sort, mesh)(scene.x, scene.surface, radius=scene.radius)
     assert_same_contact(binned, all_to_all(scene.x, scene.surface, radius=scene.radius))
 
 
+def test_sharded_bucket_detectors_under_jit_raise_naming_search(mesh):
+    scene = _scene(1_000)
+    with pytest.raises(ValueError, match=r"sharded\(bucket_sort\) .*Search"):
+        jax.jit(sharded(bucket_sort, mesh))(scene.x, scene.surface, radius=RADIUS)
+    with pytest.raises(ValueError, match=r"sharded\(bucket_swept\) .*Search"):
+        jax.jit(sharded(bucket_swept, mesh))(scene.x_prev, scene.x, scene.surface)
+
+
 def test_overflow_on_one_device_is_overflow_of_the_whole(mesh):
-    # A plan made for the quarter of the rows clear of the tool keeps one
-    # block; the device holding the cut overflows, and the result says so.
+    # Sizes measured for the quarter of the rows clear of the tool keep one
+    # block; with them on every device (a detector of the bucket sort's form
+    # at fixed sizes), the device holding the cut overflows, and the result
+    # says so.
     scene = _scene(1_100)
     per_device = -(-scene.x.shape[0] // DEVICES)
-    clear = plan_buckets(scene.x[:per_device], scene.surface, radius=RADIUS)
+    clear = measure(scene.x[:per_device], scene.surface, radius=RADIUS)
     assert clear.block_capacity == 1
-    detect = jax.jit(sharded(bucket_sort, mesh), static_argnames="plan")
-    result = detect(scene.x, scene.surface, radius=RADIUS, plan=clear)
+
+    def starved(x, surface, *, radius, mask):
+        return _bucket.contact_jit(x, surface, radius, mask, sizes=clear)
+
+    radius = jnp.asarray(RADIUS, scene.x.dtype)
+    result = jax.jit(sharded(starved, mesh))(scene.x, scene.surface, radius=radius)
     assert bool(result.overflow)
 
 
