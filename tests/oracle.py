@@ -1,4 +1,4 @@
-"""A brute-force oracle, written from the contract (docs/contract.md) alone, that returns float64 NumPy arrays.
+"""A brute-force oracle, written from docs/contract.md alone, returning float64 NumPy arrays.
 
 Plain loops over every (slave, segment) pair, one textbook formula each; it
 shares no code with the package. Every input float is an exact rational, and
