@@ -1,36 +1,37 @@
-"""One contact-search step at 81,939 nodes: fixed sizes, a reused ``Search`` state, a re-find.
+"""One contact-search step: fixed sizes, a reused ``Search`` state, a re-find.
 
-The cutting scene (docs/scenes.md) at 81,939 nodes with the tool tip at
-``x = 18``, float32, radius 0.1. Five programs answer the same query on the
-same ``x``, timed round-robin in one process
-(``jaxcontact.bench.timing.time_interleaved``: each compiled ahead of the
-runs, its compile time reported apart; warm-up runs; then ``--repeats``
-rounds, every call ended by ``block_until_ready``; median and 10th-90th
-percentile):
+Two scenes (docs/scenes.md), float32: the cutting scene at 81,939 nodes with
+the tool tip at ``x = 18`` (radius 0.1, skin 0.05; 20 segments, no cells) and
+the rough die at 10^5 nodes x 10^4 segments (radius 0.02, skin 0.01; cells).
+On each, five programs answer the same query on the same ``x``, timed
+round-robin in one process (``jaxcontact.bench.timing.time_interleaved``:
+each compiled ahead of the runs, its compile time reported apart; warm-up
+runs; then ``--repeats`` rounds, every call ended by ``block_until_ready``;
+median and 10th-90th percentile):
 
 - (a) ``bucket_sort (sized)``: the bucket sort with ``Sizes`` measured once
   at the radius (``jaxcontact._sizes.measure``) and reused every call
-  (``jaxcontact._bucket.contact_jit``): the broad phase and the narrow phase
-  every call, no measuring.
-- (b) ``Search.closest (reused state)``: ``Search(radius=0.1, skin=0.05)``,
-  its state allocated at ``x``; every call is on that same ``x``, so the
-  skin rule holds and the candidates found within ``radius + skin`` are
-  kept: the skin check, then the narrow phase on the candidates.
+  (``jaxcontact._bucket.contact_jit``): the broad and the narrow phase every
+  call, no measuring.
+- (b) ``Search.closest (reused state)``: ``Search(radius, skin)``, its state
+  allocated at ``x``; every call is on that same ``x``, so the skin rule
+  holds. With cells the candidates found within ``radius + skin`` are kept:
+  the skin check, then the narrow phase on them. Without cells a ``Search``
+  keeps no candidates and runs the whole search with its sizes.
 - (c) ``Search.closest (re-find every call)``: the same search, its state
   allocated at ``x`` moved by ``(2 skin, 0)``; every call is on ``x``, so
-  the slaves have moved twice the skin since the candidates were found and
-  each call finds them again inside the step (the skin check, the find, the
-  narrow phase). The state is not threaded from call to call: each call
-  starts from that same stale state, and the state it returns is checked to
-  count one rebuild. (b)'s and (c)'s states are sized for both positions
-  together (``allocate(..., at_least=...)``), so they run one program.
-- (d) ``Search.closest (skin 0)``: ``Search(radius=0.1)`` keeps no
-  candidates; each call runs the whole bucket sort with the allocated sizes,
-  as (a) does, through the public step.
-- (e) ``all_to_all``: every slave against every segment.
+  each call finds the candidates again inside the step (with cells). The
+  state is not threaded from call to call, and the state it returns is
+  checked to count one rebuild. (b)'s and (c)'s states are sized for both
+  positions together (``allocate(..., at_least=...)``): one program.
+- (d) ``Search.closest (skin 0)``: ``Search(radius)`` keeps no candidates;
+  each call runs the whole bucket sort with the allocated sizes, as (a).
+- (e) ``all_to_all``: every slave against every segment (the cutting scene
+  only: on the rough die it is 10^9 pairs).
 
-Each answer's ``segment`` and ``found`` are compared with ``all_to_all``'s
-(the ``check`` column), and each overflow flag is reported.
+Each answer's ``segment`` and ``found`` are compared with ``all_to_all``'s on
+the cutting scene and with (a)'s on the rough die (the ``check`` column), and
+each overflow flag is reported.
 
     python benchmarks/search_step.py                 # 200 rounds
     python benchmarks/search_step.py --quick         # 20 rounds, a smoke test
@@ -52,30 +53,41 @@ from jaxcontact import Contact, Search, all_to_all
 from jaxcontact._sizes import measure
 from jaxcontact.bench._run import machine, sized_contact
 from jaxcontact.bench.timing import time_interleaved
-from jaxcontact.scenes import cutting_scene
+from jaxcontact.scenes import cutting_scene, rough_die_scene
 
-NODES = 81_939
-SKIN = 0.05
 
-WHAT = {
-    "bucket_sort (sized)": "broad + narrow phase, sizes fixed (measured once, at the radius)",
-    "Search.closest (reused state)": "skin check; candidates kept; narrow phase on them",
-    "Search.closest (re-find every call)": "skin check; candidates found again; narrow phase",
-    "Search.closest (skin 0)": "no candidates kept: broad + narrow phase, sizes allocated",
-    "all_to_all": "every slave against every segment",
-}
+def scenes(quick: bool):
+    """(title, scene, skin, dense reference?) of each scene measured."""
+    die = (10_000, 1_000) if quick else (100_000, 10_000)
+    return [
+        ("cutting scene x_tip=18", cutting_scene(81_939, x_tip=18.0), 0.05, True),
+        (f"rough die {die[0]:,} x {die[1]:,}", rough_die_scene(*die), 0.01, False),
+    ]
+
+
+def what(name: str, state) -> str:
+    """What one call of ``name`` does, read off its state."""
+    if name == "bucket_sort (sized)":
+        return "broad + narrow phase, sizes fixed (measured once, at the radius)"
+    if name == "all_to_all":
+        return "every slave against every segment"
+    if state.candidates is None:
+        return "no candidates kept: broad + narrow phase with the allocated sizes"
+    if name == "Search.closest (reused state)":
+        return "skin check; candidates kept; narrow phase on them"
+    return "skin check; candidates found again; narrow phase"
 
 
 def differences(result, reference) -> str:
-    """Rows whose segment or found flag differ from ``all_to_all``'s."""
+    """Rows whose segment or found flag differ from the reference's."""
     segment = np.asarray(result.segment) != np.asarray(reference.segment)
     found = np.asarray(result.found) != np.asarray(reference.found)
     wrong = int(np.sum(segment | found))
     return f"{wrong} of {int(np.sum(np.asarray(reference.found)))} found differ"
 
 
-def programs(scene, radius: float, skin: float):
-    """name -> (fn, args), and notes on how (c) was set up."""
+def programs(scene, radius: float, skin: float, dense: bool):
+    """name -> (fn, args), and notes on how they were set up."""
     x, surface = scene.x, scene.surface
     sized_sizes = measure(x, surface, radius=radius)
     sized = sized_contact(radius, sized_sizes)
@@ -88,24 +100,26 @@ def programs(scene, radius: float, skin: float):
     reused = search.allocate(x, surface, at_least=stale)
     step = jax.jit(search.closest)
     plain = Search(radius=radius)
-    plain_state = plain.allocate(x, surface)
-    dense = jax.jit(functools.partial(all_to_all, radius=radius))
     calls = {
         "bucket_sort (sized)": (sized, (x, surface)),
         "Search.closest (reused state)": (step, (reused, x, surface)),
         "Search.closest (re-find every call)": (step, (stale, x, surface)),
-        "Search.closest (skin 0)": (jax.jit(plain.closest), (plain_state, x, surface)),
-        "all_to_all": (dense, (x, surface)),
+        "Search.closest (skin 0)": (
+            jax.jit(plain.closest),
+            (plain.allocate(x, surface), x, surface),
+        ),
     }
-    shared = stale.sizes == reused.sizes
-    same = "the same program as (b)" if shared else f"other sizes than (b): {stale.sizes}"
+    if dense:
+        calls["all_to_all"] = (jax.jit(functools.partial(all_to_all, radius=radius)), (x, surface))
     notes = [
         f"(a) sizes at radius {radius:g}: {brief(sized_sizes)}; (b), (c) sizes at radius + skin "
         f"{radius + skin:g}, for x and x + ({2 * skin:g}, 0) together: {brief(reused.sizes)}.",
-        f"(c) re-finds by a stale state: allocated at x + ({2 * skin:g}, 0), called on x "
-        f"(moved {2 * skin:g} > skin {skin:g}), not threaded; {same}"
-        + (" (its compile time is JAX's cache look-up of (b)'s)." if shared else "."),
     ]
+    if reused.candidates is not None:
+        notes.append(
+            f"(c) re-finds by a stale state: allocated at x + ({2 * skin:g}, 0), called on x "
+            f"(moved {2 * skin:g} > skin {skin:g}), not threaded; the same program as (b)."
+        )
     return calls, notes
 
 
@@ -114,29 +128,30 @@ def brief(sizes) -> str:
     blocks = -(-sizes.num_slaves // sizes.block_size)
     text = f"{sizes.block_capacity} of {blocks} blocks of {sizes.block_size} slaves kept"
     if sizes.use_cells:
-        return text + f", {sizes.grid_shape} cells of {sizes.cell_capacity} segments"
+        return text + f", {sizes.grid_shape} cells of at most {sizes.cell_capacity} segments"
     return text + ", each kept slave against every segment (no cells)"
 
 
-def table(calls, timings, results, reference) -> list[str]:
-    dense_ms = timings["all_to_all"].median_s * 1e3
+def table(calls, timings, results, reference_name) -> list[str]:
+    base = timings["bucket_sort (sized)"].median_s * 1e3
+    reference = results[reference_name]
+    reference = reference if isinstance(reference, Contact) else reference[0]
     lines = [
-        "| method | what a call does | median ms | p10-p90 ms | all_to_all / this "
-        "| compile s | check |",
+        "| method | what a call does | median ms | p10-p90 ms | sized / this "
+        f"| compile s | check against {reference_name} |",
         "|---|---|---:|---:|---:|---:|---|",
     ]
-    for name in calls:
+    for name, (_, args) in calls.items():
         timing = timings[name]
         result = results[name]
         contact, state = (result, None) if isinstance(result, Contact) else result
-        check = differences(contact, reference)
-        check += f"; overflow {bool(contact.overflow)}"
+        check = differences(contact, reference) + f"; overflow {bool(contact.overflow)}"
         if state is not None:
             check += f"; rebuilds {int(state.rebuilds)}"
         ms = timing.median_s * 1e3
         lines.append(
-            f"| {name} | {WHAT[name]} | {ms:.3f} "
-            f"| {timing.p10_s * 1e3:.3f}-{timing.p90_s * 1e3:.3f} | {dense_ms / ms:.1f}x "
+            f"| {name} | {what(name, args[0])} | {ms:.3f} "
+            f"| {timing.p10_s * 1e3:.3f}-{timing.p90_s * 1e3:.3f} | {base / ms:.2f}x "
             f"| {timing.compile_s:.2f} | {check} |"
         )
     return lines
@@ -151,34 +166,35 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     repeats = args.repeats or (20 if args.quick else 200)
 
-    scene = cutting_scene(NODES, x_tip=18.0, x_tip_prev=18.2)
-    radius = float(scene.radius)
-    calls, notes = programs(scene, radius, SKIN)
-    timings = time_interleaved(calls, repeats=repeats, warmup=args.warmup)
-    results = {name: jax.block_until_ready(fn(*fn_args)) for name, (fn, fn_args) in calls.items()}
-    reference = results["all_to_all"]
-
     command = "python benchmarks/search_step.py" + " --quick" * args.quick
     if args.repeats:
         command += f" --repeats {args.repeats}"
     if args.warmup != 5:
         command += f" --warmup {args.warmup}"
-    nodes, segments = scene.x.shape[0], scene.surface.segments.shape[0]
-    text = "\n".join(
-        [
-            "## Search step",
+    lines = [
+        "## Search step",
+        "",
+        f"`{command}`; {machine()}; float32; median of {repeats} interleaved rounds after "
+        f"{args.warmup} warm-up runs, compile apart. Ratio: the sized bucket sort's median "
+        "over the method's.",
+        "",
+    ]
+    for title, scene, skin, dense in scenes(args.quick):
+        radius = float(scene.radius)
+        calls, notes = programs(scene, radius, skin, dense)
+        timings = time_interleaved(calls, repeats=repeats, warmup=args.warmup)
+        results = {name: jax.block_until_ready(fn(*a)) for name, (fn, a) in calls.items()}
+        nodes, segments = scene.x.shape[0], scene.surface.segments.shape[0]
+        lines += [
+            f"### {title}: {nodes:,} nodes x {segments:,} segments, radius {radius:g}, "
+            f"skin {skin:g}",
             "",
-            f"`{command}`; {machine()}; cutting scene x_tip=18, {nodes:,} nodes x "
-            f"{segments} segments, float32, radius {radius:g}, skin {SKIN:g}; "
-            f"median of {repeats} interleaved rounds after {args.warmup} warm-up runs, "
-            "compile apart.",
-            "",
-            *table(calls, timings, results, reference),
+            *table(calls, timings, results, "all_to_all" if dense else "bucket_sort (sized)"),
             "",
             *[f"- {note}" for note in notes],
             "",
         ]
-    )
+    text = "\n".join(lines)
     print(text)
     if args.out:
         os.makedirs(args.out, exist_ok=True)

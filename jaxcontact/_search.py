@@ -99,9 +99,10 @@ class Search:
         since exceeds it (or a row or segment becomes real, or a segment is
         joined to other nodes). Reuse skips the broad phase and the binning
         but reads every row to check the rule, and searches the longer lists
-        of the wider reach: on the rough die at 10^5 x 10^4 it measured level
-        with the whole search. Without cells no candidates are kept (the
-        sizes are still measured at ``radius + skin``).
+        of the wider reach: on the rough die at 10^5 x 10^4 a reused step
+        measured level with the whole search, a re-finding step a third
+        slower (``benchmarks/search_step.py``). Without cells no candidates
+        are kept (the sizes are still measured at ``radius + skin``).
       method: ``"binned"``: bucket sort with the segments binned in cells,
         each kept slave against its cell's segments; ``"dense"``: bucket
         sort with each kept slave against every segment; ``"auto"``:
@@ -239,9 +240,9 @@ class Search:
 
     def _find(self, x, surface, mask, sizes: Sizes):
         """``(candidates or None, overflow)``: none are kept without a skin or
-        without cells (re-culling the blocks of slaves reads ``x`` once; the
-        skin check would read it and the kept positions: measured 1.3 against
-        1.9 ms a step on the cutting scene, ``benchmarks/search_step.py``)."""
+        without cells: there, re-culling the blocks of slaves reads ``x``
+        once, and the skin check would read it and the kept positions, for
+        nothing else to skip."""
         empty = x.shape[0] == 0 or surface.segments.shape[0] == 0
         if self.skin == 0 or not sizes.use_cells or empty:
             return None, jnp.zeros((), bool)
