@@ -173,6 +173,14 @@ def check_path_inputs(x_prev, x, mask):
     return x_prev, x, check_mask("mask", mask, x.shape[0])
 
 
+def check_slaves(x, x_prev, mask):
+    """Checks the slaves, with their previous positions when given: ``(x_prev, x, mask)``."""
+    if x_prev is not None:
+        return check_path_inputs(x_prev, x, mask)
+    x = check_points("x", x)
+    return None, x, check_mask("mask", mask, x.shape[0])
+
+
 def paths_ok(x_prev: Array, x: Array, mask: Array | None) -> Array:
     """bool[N]: both ends of the path are finite and the row is not masked out."""
     return rows_ok(x, rows_ok(x_prev, mask))

@@ -174,11 +174,7 @@ class Search:
         batched = np.ndim(x) == 3
         if batched:
             return self._allocate_batch(x, surface, x_prev, mask, at_least)
-        if x_prev is not None:
-            x_prev, x, mask = _inputs.check_path_inputs(x_prev, x, mask)
-        else:
-            x = _inputs.check_points("x", x)
-            mask = _inputs.check_mask("mask", mask, x.shape[0])
+        x_prev, x, mask = _inputs.check_slaves(x, x_prev, mask)
         surface = _inputs.check_surface(surface, x.dtype)
         sizes = path_sizes = candidates = None
         overflow = jnp.zeros((), bool)

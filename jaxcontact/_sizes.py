@@ -167,18 +167,15 @@ def measure(
       ``Sizes``.
     """
     if (radius is None) == (x_prev is None):
-        raise ValueError("measure needs radius= (for bucket_sort) or x_prev= (for bucket_swept)")
+        raise ValueError("measure needs radius= (closest points) or x_prev= (paths)")
     if slack < 1:
         raise ValueError(f"slack must be >= 1; got {slack}")
     if not cell_factor > 0:
         raise ValueError(f"cell_factor must be > 0; got {cell_factor}")
     if cell_size is not None and not (math.isfinite(cell_size) and cell_size > 0):
         raise ValueError(f"cell_size must be finite and > 0; got {cell_size}")
-    if x_prev is not None:
-        x_prev, x, mask = _inputs.check_path_inputs(x_prev, x, mask)
-    else:
-        x = _inputs.check_points("x", x)
-        mask = _inputs.check_mask("mask", mask, x.shape[0])
+    x_prev, x, mask = _inputs.check_slaves(x, x_prev, mask)
+    if x_prev is None:
         radius = _inputs.check_radius(radius, x.dtype)
     surface = _inputs.check_surface(surface, x.dtype)
     num_rows, num_segments = x.shape[0], surface.segments.shape[0]
