@@ -14,4 +14,4 @@ from jaxcontact._types import Crossing as Crossing
 from jaxcontact._types import Surface as Surface
 from jaxcontact._validate import validate as validate
 
-__version__ = "0.1.0"
+__version__ = "0.2.0"

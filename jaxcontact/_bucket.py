@@ -68,7 +68,16 @@ def find(x, surface: Surface, reach, mask, sizes: Sizes) -> Candidates:
         # Cells no kept slave looks up cannot lose a candidate.
         overflow = overflow | (cells_overflow & (blocks.count > 0))
     x, nodes = jax.lax.stop_gradient((x, surface.nodes))
-    return Candidates(blocks, listed, x, nodes, slave_ok, segments.ok, segments.indices, overflow)
+    return Candidates(
+        blocks=blocks,
+        listed=listed,
+        reference=x,
+        nodes=nodes,
+        row_ok=slave_ok,
+        segment_ok=segments.ok,
+        indices=segments.indices,
+        overflow=overflow,
+    )
 
 
 def expired(candidates: Candidates, x, surface: Surface, mask, skin) -> Array:
@@ -83,11 +92,13 @@ def expired(candidates: Candidates, x, surface: Surface, mask, skin) -> Array:
     """
 
     def largest(squared, ok):
-        return jnp.sqrt(jnp.max(jnp.where(ok & jnp.isfinite(squared), squared, 0), initial=0))
+        # A real row's (or segment's) move that is not finite overflowed: stale.
+        squared = jnp.where(jnp.isnan(squared), jnp.inf, squared)
+        return jnp.sqrt(jnp.max(jnp.where(ok, squared, 0), initial=0))
 
     row_ok = _inputs.rows_ok(x, mask)
     segments = _inputs.resolve_segments(surface)
-    ends_then = candidates.nodes[jnp.clip(segments.indices, 0, surface.nodes.shape[0] - 1)]
+    ends_then = candidates.nodes[jnp.clip(segments.indices, 0, candidates.nodes.shape[0] - 1)]
     ends_now = jnp.stack([segments.start, segments.end], axis=1)
     end_moves = jnp.max(jnp.sum((ends_now - ends_then) ** 2, axis=-1), axis=-1)
     rows_moved = largest(jnp.sum((x - candidates.reference) ** 2, axis=-1), row_ok)
@@ -214,12 +225,16 @@ def check_sizes(sizes, num_slaves: int, for_paths: bool):
         raise ValueError(f"sizes were made for the other query; this one needs sizes for {wanted}")
 
 
-def _concrete_only(name: str, values):
+def _concrete_only(name: str, values, hint: str | None = None):
+    """A ``ValueError`` when ``values`` are traced: sizes are measured on the host."""
     if any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree.leaves(values)):
+        hint = hint or (
+            "use jaxcontact.Search (allocate once outside, then search.closest / "
+            "search.swept inside)"
+        )
         raise ValueError(
             f"{name} measures its sizes from concrete data, so it cannot run under jit, "
-            "vmap or grad of its inputs: use jaxcontact.Search (allocate once outside, "
-            "then search.closest / search.swept inside)"
+            f"vmap or grad of its inputs: {hint}"
         )
 
 

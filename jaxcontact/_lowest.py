@@ -100,7 +100,7 @@ def one_scene_at_a_time(fn):
     through ``stop_gradient`` (``jax.custom_batching.custom_vmap`` supports
     no reverse-mode differentiation) and hold ``lax.cond`` s, which ``vmap``
     would turn into selects that run both branches and lose the fusion
-    boundary ``_assemble.in_stages`` relies on. Mapped, each scene keeps
+    boundary ``_narrow.in_stages`` relies on. Mapped, each scene keeps
     them; the batched rest (assembling, writing rows) stays vectorised. On
     the CPU that measured as fast per scene as one unbatched call, where
     plain batching was up to 6x slower (benchmarks/scaling.py). On other

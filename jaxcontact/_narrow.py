@@ -60,7 +60,7 @@ def _search_rows(pair_value, segments: Segments, listed: CellLists, capacity: in
     # the unrolled loop slow to compile and to run: scan blocks of 8 (measured
     # 3x faster to compile and 1.3-1.7x faster to run on the cutting scene).
     # Every row runs as many slots as the fullest list among them needs, not
-    # the planned capacity (measured 1.3x faster on the rough die).
+    # the capacity in the sizes (measured 1.3x faster on the rough die).
     fullest = jnp.max(listed.count, initial=0)
     return lowest_score(
         score, capacity, listed.first.shape[0], dtype, unroll=8, steps_needed=fullest

@@ -15,6 +15,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+import operator
 
 import jax
 import jax.numpy as jnp
@@ -30,7 +31,7 @@ METHODS = ("auto", "binned", "dense", "exhaustive")
 @functools.partial(
     jax.tree_util.register_dataclass,
     data_fields=["candidates", "overflow", "rebuilds"],
-    meta_fields=["sizes", "path_sizes"],
+    meta_fields=["sizes", "path_sizes", "reach"],
 )
 @dataclasses.dataclass(frozen=True)
 class SearchState:
@@ -47,11 +48,14 @@ class SearchState:
         with ``x_prev``).
       candidates: what lies within ``radius + skin``, found at ``allocate``
         or since, with the positions it was found at (``None`` without a
-        skin).
+        skin, without cells, or on empty inputs: then every step searches
+        afresh).
       overflow: bool[] some search since ``allocate`` outgrew the sizes: a
         contact or crossing may have been missed. It stays True.
       rebuilds: i32[] how often the candidates were found again since
         ``allocate``.
+      reach: ``radius + skin`` of the search that allocated it (static):
+        a search that reaches farther refuses the state.
     """
 
     sizes: Sizes | None
@@ -59,6 +63,7 @@ class SearchState:
     candidates: _bucket.Candidates | None
     overflow: Array
     rebuilds: Array
+    reach: float | None = None
 
 
 @dataclasses.dataclass(frozen=True)
@@ -71,7 +76,7 @@ class Search:
       >>> import jaxcontact
       >>> from jaxcontact.scenes import cutting_scene
       >>> scene = cutting_scene(2_000, 18.0, x_tip_prev=18.2)
-      >>> search = jaxcontact.Search(radius=0.1, skin=0.05)
+      >>> search = jaxcontact.Search(radius=0.1, skin=0.05, method="binned")
       >>> state = search.allocate(scene.x, scene.surface, x_prev=scene.x_prev)
       >>> step = jax.jit(search.closest)
       >>> contact, state = step(state, scene.x, scene.surface)
@@ -84,6 +89,9 @@ class Search:
       >>> dense = jaxcontact.all_to_all(moved, scene.surface, radius=0.1)
       >>> bool((contact.segment == dense.segment).all())
       True
+      >>> contact, state = step(state, scene.x.at[:, 0].add(0.06), scene.surface)
+      >>> int(state.rebuilds)  # more than the skin since they were found: found again
+      1
       >>> crossing, state = search.swept(state, scene.x_prev, scene.x, scene.surface)
       >>> dense = jaxcontact.swept(scene.x_prev, scene.x, scene.surface)
       >>> int(crossing.crossed.sum()) == int(dense.crossed.sum()) > 0
@@ -126,17 +134,31 @@ class Search:
     chunk_rows: int = CHUNK_ROWS
 
     def __post_init__(self):
-        if self.radius is not None and not (math.isfinite(self.radius) and self.radius >= 0):
-            raise ValueError(f"radius must be finite and >= 0, or None; got {self.radius}")
+        # Plain Python numbers: the search is hashed as a static argument.
+        def number(name, value, kind):
+            try:
+                return kind(value) if kind is float else operator.index(value)
+            except TypeError:
+                raise ValueError(f"{name} must be a real {kind.__name__}; got {value!r}") from None
+
+        kinds = {"skin": float, "slack": float, "block_size": int, "cells_above": int}
+        for name, kind in {**kinds, "chunk_rows": int}.items():
+            object.__setattr__(self, name, number(name, getattr(self, name), kind))
+        if self.radius is not None:
+            object.__setattr__(self, "radius", number("radius", self.radius, float))
+            if not (math.isfinite(self.radius) and self.radius >= 0):
+                raise ValueError(f"radius must be finite and >= 0, or None; got {self.radius}")
         if not (math.isfinite(self.skin) and self.skin >= 0):
             raise ValueError(f"skin must be finite and >= 0; got {self.skin}")
         if self.method not in METHODS:
             raise ValueError(f"method must be one of {METHODS}; got {self.method!r}")
-        if not self.slack >= 1:
-            raise ValueError(f"slack must be >= 1; got {self.slack}")
+        if not (math.isfinite(self.slack) and self.slack >= 1):
+            raise ValueError(f"slack must be finite and >= 1; got {self.slack}")
         for name in ("block_size", "chunk_rows"):
-            if not (isinstance(getattr(self, name), int) and getattr(self, name) >= 1):
+            if getattr(self, name) < 1:
                 raise ValueError(f"{name} must be an int >= 1; got {getattr(self, name)!r}")
+        if self.cells_above < 0:
+            raise ValueError(f"cells_above must be an int >= 0; got {self.cells_above}")
 
     # -- host ---------------------------------------------------------------
 
@@ -170,7 +192,8 @@ class Search:
         """
         if self.radius is None and x_prev is None:
             raise ValueError("allocate needs x_prev= for a Search without a radius (paths only)")
-        _bucket._concrete_only("Search.allocate", (x, surface, x_prev, mask))
+        hint = "allocate once outside, or start a state inside with search.init(sizes=...)"
+        _bucket._concrete_only("Search.allocate", (x, surface, x_prev, mask), hint)
         batched = np.ndim(x) == 3
         if batched:
             return self._allocate_batch(x, surface, x_prev, mask, at_least)
@@ -186,12 +209,24 @@ class Search:
             if x_prev is not None:
                 path_sizes = measure(x, surface, x_prev=x_prev, mask=mask, **self._sizing)
                 path_sizes = self._merged(path_sizes, at_least, "path_sizes")
-        return SearchState(sizes, path_sizes, candidates, overflow, jnp.zeros((), jnp.int32))
+        return self._state(sizes, path_sizes, candidates, overflow, ())
 
     def _allocate_batch(self, x, surface, x_prev, mask, at_least) -> SearchState:
         x = jnp.asarray(x)
         if x.shape[-1] != 2:
             raise ValueError(f"x must have shape (N, 2) or (B, N, 2); got shape {x.shape}")
+        # A mask, or a surface's segments and mask, may be shared by the batch.
+        batch = x.shape[0]
+        if mask is not None and np.ndim(mask) == 1:
+            mask = jnp.broadcast_to(jnp.asarray(mask), x.shape[:2])
+        if np.ndim(surface.nodes) == 3:
+            segments = jnp.asarray(surface.segments)
+            if segments.ndim == 2:
+                segments = jnp.broadcast_to(segments, (batch,) + segments.shape)
+            segment_mask = surface.mask
+            if segment_mask is not None and np.ndim(segment_mask) == 1:
+                segment_mask = jnp.broadcast_to(jnp.asarray(segment_mask), segments.shape[:2])
+            surface = Surface(surface.nodes, segments, segment_mask)
         axes = (0, 0 if np.ndim(surface.nodes) == 3 else None, None if mask is None else 0)
         sizes = path_sizes = candidates = None
         overflow = jnp.zeros(x.shape[:1], bool)
@@ -207,9 +242,7 @@ class Search:
             if x_prev is not None:
                 path_sizes = measure_batch(x, surface, x_prev=x_prev, mask=mask, **self._sizing)
                 path_sizes = self._merged(path_sizes, at_least, "path_sizes")
-        return SearchState(
-            sizes, path_sizes, candidates, overflow, jnp.zeros(x.shape[:1], jnp.int32)
-        )
+        return self._state(sizes, path_sizes, candidates, overflow, x.shape[:1])
 
     def init(
         self,
@@ -229,10 +262,24 @@ class Search:
         mask = _inputs.check_mask("mask", mask, x.shape[0])
         surface = _inputs.check_surface(surface, x.dtype)
         candidates, overflow = None, jnp.zeros((), bool)
+        if sizes is not None and self.radius is None:
+            raise ValueError(
+                "init with sizes= needs a Search with a radius; this one searches paths"
+            )
         if sizes is not None:
             _bucket.check_sizes(sizes, x.shape[0], for_paths=False)
             candidates, overflow = self._find(x, surface, mask, sizes)
-        return SearchState(sizes, path_sizes, candidates, overflow, jnp.zeros((), jnp.int32))
+        return self._state(sizes, path_sizes, candidates, overflow, ())
+
+    def _state(self, sizes, path_sizes, candidates, overflow, batch) -> SearchState:
+        return SearchState(
+            sizes=sizes,
+            path_sizes=path_sizes,
+            candidates=candidates,
+            overflow=overflow,
+            rebuilds=jnp.zeros(batch, jnp.int32),
+            reach=None if self.radius is None else self._reach,
+        )
 
     def _find(self, x, surface, mask, sizes: Sizes):
         """``(candidates or None, overflow)``: none are kept without a skin or
@@ -265,8 +312,16 @@ class Search:
     def _merged(sizes: Sizes, at_least, field: str) -> Sizes:
         if isinstance(at_least, Sizes):
             old = at_least if at_least.for_paths == sizes.for_paths else None
-        else:
+        elif at_least is None or isinstance(at_least, SearchState):
             old = None if at_least is None else getattr(at_least, field)
+        else:
+            raise ValueError(
+                f"at_least must be a SearchState or Sizes; got {type(at_least).__name__}"
+            )
+        if old is not None and old.num_slaves != sizes.num_slaves:
+            raise ValueError(
+                f"at_least was allocated for {old.num_slaves} slaves; x has {sizes.num_slaves}"
+            )
         return sizes if old is None else largest(sizes, old)
 
     # -- traced -------------------------------------------------------------
@@ -301,7 +356,35 @@ class Search:
                 "state has no closest-point sizes: make it with this search's allocate"
             )
         _bucket.check_sizes(state.sizes, x.shape[0], for_paths=False)
+        self._check_state(state, x, surface)
         return _closest(self, state, x, surface, mask)
+
+    def _check_state(self, state: SearchState, x, surface: Surface):
+        """The state was allocated by a search of this reach, for these shapes."""
+        if state.reach is not None and state.reach < self._reach:
+            raise ValueError(
+                f"state was allocated by a search reaching radius + skin = {state.reach:g}; "
+                f"this one reaches {self._reach:g}: allocate with this search"
+            )
+        near = state.candidates
+        if near is None:
+            return
+        if near.reference.ndim != x.ndim:
+            raise ValueError(
+                f"state was allocated for a batch of {near.reference.shape[0]} scenes: "
+                "map closest over it with jax.vmap"
+            )
+        expected = {
+            "x": (near.reference.shape, near.reference.dtype, x),
+            "surface.nodes": (near.nodes.shape, near.nodes.dtype, surface.nodes),
+            "surface.segments": (near.indices.shape, near.indices.dtype, surface.segments),
+        }
+        for name, (shape, dtype, value) in expected.items():
+            if (value.shape, value.dtype) != (shape, dtype):
+                raise ValueError(
+                    f"{name} must have the allocated shape {shape} and dtype {dtype}; "
+                    f"got shape {value.shape} and dtype {value.dtype}"
+                )
 
     def swept(
         self,
@@ -347,11 +430,10 @@ def _closest(search: Search, state: SearchState, x, surface, mask):
 
     candidates = jax.lax.cond(stale, find_again, keep, x, surface, mask, state.candidates)
     contact = _bucket.contact_jit(x, surface, radius, mask, sizes=sizes, candidates=candidates)
-    state = SearchState(
-        sizes,
-        state.path_sizes,
-        candidates,
-        state.overflow | contact.overflow,
-        state.rebuilds + stale.astype(jnp.int32),
+    state = dataclasses.replace(
+        state,
+        candidates=candidates,
+        overflow=state.overflow | contact.overflow,
+        rebuilds=state.rebuilds + stale.astype(jnp.int32),
     )
     return contact, state

@@ -40,7 +40,7 @@ class Sizes:
     A change of any field compiles the detectors anew.
 
     Attributes:
-      num_slaves: N, the slave count the plan was made for.
+      num_slaves: N, the slave count the sizes were measured for.
       block_size: slaves culled together (consecutive rows).
       block_capacity: most blocks kept near the master.
       for_paths: made for ``bucket_swept`` (path boxes) rather than ``bucket_sort``.

@@ -175,6 +175,9 @@ def test_stale_candidates_are_found_again_never_used():
     check(hidden, scene.x, scene.surface, mask=jnp.asarray(~near), rebuilt=0)
     nan = scene.x.at[np.flatnonzero(near)].set(jnp.nan)
     check(search.allocate(nan, scene.surface), scene.x, scene.surface, rebuilt=1)
+    # A move so large its square overflows float32 is a move, not none.
+    far = scene.x.at[0].set(jnp.asarray([3e19, 0.0], scene.x.dtype))
+    check(state, far, scene.surface, rebuilt=1)
     # A segment joined to other nodes (same node count): found again.
     rejoined = scene.surface._replace(segments=jnp.roll(scene.surface.segments, 1, axis=0))
     check(state, scene.x, rejoined, rebuilt=1)
@@ -223,7 +226,7 @@ def test_state_is_a_pytree_with_static_sizes():
         ({"radius": -1.0}, "radius must be finite and >= 0"),
         ({"radius": 0.1, "skin": float("nan")}, "skin must be finite"),
         ({"radius": 0.1, "method": "fast"}, "method must be one of"),
-        ({"radius": 0.1, "slack": 0.5}, "slack must be >= 1"),
+        ({"radius": 0.1, "slack": 0.5}, "slack must be finite and >= 1"),
         ({"radius": 0.1, "block_size": 0}, "block_size must be an int >= 1"),
     ],
 )
@@ -250,6 +253,53 @@ def test_misuse_raises_a_clear_error():
         Search().allocate(scene.x, scene.surface)
     with pytest.raises(ValueError, match="searches paths only"):
         Search().closest(state, scene.x, scene.surface)
+
+
+def test_a_state_is_refused_by_a_search_or_shapes_it_was_not_allocated_for():
+    scene = cutting_scene(2_000, 18.0)
+    search = Search(radius=RADIUS, skin=SKIN, method="binned")
+    state = search.allocate(scene.x, scene.surface)
+    wider = Search(radius=0.5, skin=SKIN, method="binned")
+    with pytest.raises(ValueError, match="reaching radius \\+ skin = 0.15; this one reaches 0.55"):
+        wider.closest(state, scene.x, scene.surface)
+    _, stepped = search.closest(state, scene.x, scene.surface)  # a stepped state remembers too
+    with pytest.raises(ValueError, match="reaching radius"):
+        wider.closest(stepped, scene.x, scene.surface)
+    fewer = Surface(scene.surface.nodes, scene.surface.segments[:-1])
+    with pytest.raises(
+        ValueError, match=r"surface.segments must have the allocated shape \(20, 2\)"
+    ):
+        search.closest(state, scene.x, fewer)
+    more = Surface(jnp.concatenate([scene.surface.nodes, scene.surface.nodes[:1]]), fewer.segments)
+    with pytest.raises(ValueError, match="surface.nodes must have the allocated shape"):
+        search.closest(state, scene.x, more._replace(segments=scene.surface.segments))
+    doubled = jax.tree.map(lambda v: v.astype(jnp.float64), (scene.x, scene.surface.nodes))
+    with pytest.raises(ValueError, match="x must have the allocated shape .* dtype float32"):
+        search.closest(state, doubled[0], scene.surface._replace(nodes=doubled[1]))
+    batch = search.allocate(jnp.stack([scene.x, scene.x]), scene.surface)
+    with pytest.raises(ValueError, match="batch of 2 scenes: map closest over it with jax.vmap"):
+        search.closest(batch, scene.x, scene.surface)
+    with pytest.raises(ValueError, match="at_least must be a SearchState or Sizes"):
+        search.allocate(scene.x, scene.surface, at_least=3)
+    with pytest.raises(ValueError, match="init with sizes= needs a Search with a radius"):
+        Search(skin=SKIN).init(scene.x, scene.surface, sizes=state.sizes)
+
+
+def test_settings_are_plain_numbers_and_a_batch_may_share_its_mask_and_segments():
+    search = Search(radius=jnp.float32(0.1), skin=np.float64(0.05), block_size=np.int64(64))
+    same = Search(radius=float(np.float32(0.1)), skin=0.05)
+    assert search == same and hash(search) == hash(same) and type(search.radius) is float
+    for bad in ({"cells_above": -1}, {"slack": float("inf")}, {"block_size": 2.5}):
+        with pytest.raises(ValueError, match=next(iter(bad))):
+            Search(radius=0.1, **bad)
+    xs, nodes, segments = trajectory(jnp.float32, steps=2, x_tip=19.0)
+    mask = jnp.arange(xs.shape[1]) % 3 != 0
+    state = search.allocate(xs, Surface(nodes, segments), mask=mask)
+    step = jax.vmap(lambda state, x, surface: search.closest(state, x, surface, mask=mask))
+    contacts, _ = step(state, xs, Surface(nodes, jnp.stack([segments, segments])))
+    for b in range(2):
+        expected = all_to_all(xs[b], Surface(nodes[b], segments), radius=0.1, mask=mask)
+        assert_same_contact(jax.tree.map(lambda v, b=b: v[b], contacts), expected, 0.1)
 
 
 def test_readme_search_snippet_runs():

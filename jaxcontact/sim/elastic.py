@@ -20,8 +20,8 @@ from typing import NamedTuple
 
 import jax.numpy as jnp
 import numpy as np
+from jax import Array
 
-from jaxcontact._types import Array
 from jaxcontact.scenes import grid
 
 

@@ -46,9 +46,9 @@ from typing import NamedTuple
 import jax
 import jax.numpy as jnp
 import numpy as np
+from jax import Array
 
 from jaxcontact import Search, Sizes, Surface, contact_forces
-from jaxcontact._types import Array
 from jaxcontact.sim.elastic import Material, Mesh, internal_forces, smallest_altitude
 from jaxcontact.sim.elastic import workpiece_mesh as workpiece_mesh
 from jaxcontact.sim.tool import tool_outline as tool_outline

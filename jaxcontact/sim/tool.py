@@ -13,8 +13,9 @@ import math
 import jax
 import jax.numpy as jnp
 import numpy as np
+from jax import Array
 
-from jaxcontact._types import Array, Surface
+from jaxcontact import Surface
 
 # The cutting scene's tool (docs/scenes.md): clearance angle, face length, edge
 # radius, tip height (depth of cut 1 in a workpiece 5 high), arc segments.
