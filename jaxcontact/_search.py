@@ -48,8 +48,7 @@ class SearchState:
         with ``x_prev``).
       candidates: what lies within ``radius + skin``, found at ``allocate``
         or since, with the positions it was found at (``None`` without a
-        skin, without cells, or on empty inputs: then every step searches
-        afresh).
+        skin, or on empty inputs: then every step searches afresh).
       overflow: bool[] some search since ``allocate`` outgrew the sizes: a
         contact or crossing may have been missed. It stays True.
       rebuilds: i32[] how often the candidates were found again since
@@ -101,16 +100,16 @@ class Search:
       radius: the closest-point search radius (``closest``); ``None`` for a
         search of paths only.
       skin: ``0`` (the default) keeps no candidates: every ``closest`` runs
-        the whole bucket sort with the allocated sizes. Above 0, with cells,
-        candidates are found within ``radius + skin`` and reused until the
-        largest slave move plus the largest move of a real segment's end
-        since exceeds it (or a row or segment becomes real, or a segment is
-        joined to other nodes). Reuse skips the broad phase and the binning
-        but reads every row to check the rule, and searches the longer lists
-        of the wider reach: on the rough die at 10^5 x 10^4 a reused step
-        measured level with the whole search, a re-finding step a third
-        slower (``benchmarks/search_step.py``). Without cells no candidates
-        are kept (the sizes are still measured at ``radius + skin``).
+        the whole bucket sort with the allocated sizes. Above 0, candidates
+        are found within ``radius + skin`` and reused until the largest
+        slave move plus the largest move of a real segment's end since
+        exceeds it (or a row or segment becomes real, or a segment is joined
+        to other nodes). Reuse skips the broad phase (and the binning) but
+        reads every row to check the rule, carries the candidates in the
+        state, and searches the longer lists of the wider reach; a step that
+        finds them again costs more than one without a skin. Whether it pays
+        depends on the scene: ``benchmarks/search_step.py`` (one step) and
+        ``benchmarks/simulate.py`` (a ``lax.scan``) measure it.
       method: ``"binned"``: bucket sort with the segments binned in cells,
         each kept slave against its cell's segments; ``"dense"``: bucket
         sort with each kept slave against every segment; ``"auto"``:
@@ -282,12 +281,9 @@ class Search:
         )
 
     def _find(self, x, surface, mask, sizes: Sizes):
-        """``(candidates or None, overflow)``: none are kept without a skin or
-        without cells: there, re-culling the blocks of slaves reads ``x``
-        once, and the skin check would read it and the kept positions, for
-        nothing else to skip."""
+        """``(candidates or None, overflow)``: none are kept without a skin."""
         empty = x.shape[0] == 0 or surface.segments.shape[0] == 0
-        if self.skin == 0 or not sizes.use_cells or empty:
+        if self.skin == 0 or empty:
             return None, jnp.zeros((), bool)
         reach = jnp.asarray(self._reach, x.dtype)
         candidates = _bucket.find_jit(x, surface, reach, mask, sizes=sizes)

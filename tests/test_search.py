@@ -60,9 +60,9 @@ def test_closest_equals_all_to_all_at_every_step_and_outgrown_sizes_say_so(metho
         state = next_state
     assert overflows >= 1
     assert not bool(state.overflow)
-    if skin and state.sizes.use_cells:
+    if skin:
         assert 0 < int(state.rebuilds) < NUM_STEPS  # candidates found again, and reused
-    else:  # no skin, or no cells: the whole search at every step
+    else:  # no skin: the whole search at every step
         assert state.candidates is None and int(state.rebuilds) == 0
 
 

@@ -93,13 +93,12 @@ def test_penetration_stays_small_and_nothing_is_nan(small):
         assert np.isfinite(np.asarray(leaf, np.float64)).all()
 
 
-def test_the_small_tool_searches_afresh_every_step(small):
-    # The 20-segment tool is searched without cells, where a Search keeps no
-    # candidates: the whole bucket sort runs every step, and nothing is
-    # found again. (Reuse with cells is the next test's.)
+def test_candidate_lists_are_reused(small):
+    # Found again only every few steps, and the count is the flags'.
     _, _, config, final, history = small
-    assert config.search.skin > 0 and not config.sizes.use_cells
-    assert int(final.rebuilds) == 0 == history.rebuilt.sum()
+    assert config.search.skin > 0
+    assert 1 <= int(final.rebuilds) <= config.steps // 3
+    assert int(final.rebuilds) == history.rebuilt.sum()
 
 
 def test_reuse_surface_slaves_and_growing_sizes_change_nothing(small):
@@ -153,7 +152,7 @@ def test_demo_without_plots():
     summary, _ = run_demo(3_000, 0.2, repeats=1, dtype=np.float64)
     assert summary.steps > 0 and summary.steps_per_s > 0
     # The 20-segment tool keeps no candidate lists: none are found again.
-    assert summary.detection_share < 1 and summary.rebuilds == 0
+    assert summary.detection_share < 1 and summary.rebuilds >= 1
     assert summary.most_active >= 1 and summary.mean_force[0] > 0
     assert summary.penetration_ratio < PENETRATION_FRACTION
 

@@ -11,12 +11,11 @@ a depth of cut of 1. Every step:
    run is differentiable in the rake angle);
 2. contact by ``Search.closest`` for the slaves (by default the nodes of the
    workpiece's free outline, which meet the tool before any interior node
-   can; ``slaves="all"`` takes every node, as the cutting scene does), its
-   sizes measured for ``radius + skin`` (with a tool of more than 48
-   segments, binned in cells, it also reuses the candidates found within
-   that reach until the nodes and the tool together move more than the skin,
-   as the paper recomputes ``d_max`` only every n-th step; the 20-segment
-   tool searches afresh every step, which measured faster);
+   can; ``slaves="all"`` takes every node, as the cutting scene does),
+   which reuses the candidates found within ``radius + skin`` and finds
+   them again, inside the step, only when the nodes and the tool together
+   moved more than the skin, as the paper recomputes ``d_max`` only every
+   n-th step;
 3. a penalty force ``k (-g) n`` on every active slave and the opposite, summed,
    on the tool (``contact_forces``): its x part is the cutting force, its y
    part the thrust force;
@@ -108,7 +107,7 @@ class History(NamedTuple):
     active: Array  # i32[T]  active slaves
     penetration: Array  # f[T]  deepest penetration -min(gap) of active slaves (mm)
     signature: Array  # i32[T]  sum over active slaves of (segment + 1): the contact set's print
-    rebuilt: Array  # bool[T]  the candidates were found again at this step (kept with cells only)
+    rebuilt: Array  # bool[T]  the candidates were found again at this step
     energy: Array  # f[T]  kinetic + strain energy of the workpiece at the step (N mm per mm)
 
 
