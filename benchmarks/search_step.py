@@ -15,12 +15,11 @@ median and 10th-90th percentile):
   call, no measuring.
 - (b) ``Search.closest (reused state)``: ``Search(radius, skin)``, its state
   allocated at ``x``; every call is on that same ``x``, so the skin rule
-  holds. With cells the candidates found within ``radius + skin`` are kept:
-  the skin check, then the narrow phase on them. Without cells a ``Search``
-  keeps no candidates and runs the whole search with its sizes.
+  holds and the candidates found within ``radius + skin`` are kept: the
+  skin check, then the narrow phase on them.
 - (c) ``Search.closest (re-find every call)``: the same search, its state
   allocated at ``x`` moved by ``(2 skin, 0)``; every call is on ``x``, so
-  each call finds the candidates again inside the step (with cells). The
+  each call finds the candidates again inside the step. The
   state is not threaded from call to call, and the state it returns is
   checked to count one rebuild. (b)'s and (c)'s states are sized for both
   positions together (``allocate(..., at_least=...)``): one program.
