@@ -362,14 +362,10 @@ class Search:
                 f"state was allocated by a search reaching radius + skin = {state.reach:g}; "
                 f"this one reaches {self._reach:g}: allocate with this search"
             )
+        _check_unbatched(state, "closest")
         near = state.candidates
         if near is None:
             return
-        if near.reference.ndim != x.ndim:
-            raise ValueError(
-                f"state was allocated for a batch of {near.reference.shape[0]} scenes: "
-                "map closest over it with jax.vmap"
-            )
         expected = {
             "x": (near.reference.shape, near.reference.dtype, x),
             "surface.nodes": (near.nodes.shape, near.nodes.dtype, surface.nodes),
@@ -403,9 +399,19 @@ class Search:
             return _dense._swept(x_prev, x, surface, mask), state
         if state.path_sizes is None:
             raise ValueError("state has no path sizes: allocate it with x_prev=")
+        _check_unbatched(state, "swept")
         _bucket.check_sizes(state.path_sizes, x.shape[0], for_paths=True)
         crossing = _bucket.crossing_jit(x_prev, x, surface, mask, sizes=state.path_sizes)
         return crossing, dataclasses.replace(state, overflow=state.overflow | crossing.overflow)
+
+
+def _check_unbatched(state: SearchState, method: str):
+    """A state allocated for a batch is searched under ``vmap``, scene by scene."""
+    if np.ndim(state.overflow) != 0:
+        raise ValueError(
+            f"state was allocated for a batch of {np.shape(state.overflow)[0]} scenes: "
+            f"map {method} over it with jax.vmap"
+        )
 
 
 @functools.partial(jax.jit, static_argnums=0)

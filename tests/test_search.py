@@ -279,6 +279,11 @@ def test_a_state_is_refused_by_a_search_or_shapes_it_was_not_allocated_for():
     batch = search.allocate(jnp.stack([scene.x, scene.x]), scene.surface)
     with pytest.raises(ValueError, match="batch of 2 scenes: map closest over it with jax.vmap"):
         search.closest(batch, scene.x, scene.surface)
+    plain = Search(radius=RADIUS)  # no candidates kept: the batch is seen all the same
+    with pytest.raises(ValueError, match="batch of 2 scenes: map closest over it"):
+        plain.closest(
+            plain.allocate(jnp.stack([scene.x, scene.x]), scene.surface), scene.x, scene.surface
+        )
     with pytest.raises(ValueError, match="at_least must be a SearchState or Sizes"):
         search.allocate(scene.x, scene.surface, at_least=3)
     with pytest.raises(ValueError, match="init with sizes= needs a Search with a radius"):
