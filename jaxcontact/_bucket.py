@@ -214,6 +214,24 @@ contact_jit = jax.jit(_contact, static_argnames="sizes")
 crossing_jit = jax.jit(_crossing, static_argnames="sizes")
 
 
+def sized_bucket_sort(x, surface, *, radius, mask=None, sizes: Sizes, candidates=None) -> Contact:
+    """``bucket_sort`` at given ``Sizes`` (and reused ``candidates``), inputs
+    checked as the public detectors check them; runs under ``jit`` and
+    ``vmap`` (``sizes`` is static). ``Search``, the benchmarks and the tests
+    call it."""
+    x, surface, radius, mask = _inputs.check_contact_inputs(x, surface, radius, mask)
+    check_sizes(sizes, x.shape[0], for_paths=False)
+    return contact_jit(x, surface, radius, mask, sizes=sizes, candidates=candidates)
+
+
+def sized_bucket_swept(x_prev, x, surface, *, mask=None, sizes: Sizes) -> Crossing:
+    """``bucket_swept`` at given ``Sizes``, inputs checked; as ``sized_bucket_sort``."""
+    x_prev, x, mask = _inputs.check_path_inputs(x_prev, x, mask)
+    surface = _inputs.check_surface(surface, x.dtype)
+    check_sizes(sizes, x.shape[0], for_paths=True)
+    return crossing_jit(x_prev, x, surface, mask, sizes=sizes)
+
+
 def check_sizes(sizes, num_slaves: int, for_paths: bool):
     """Sizes made for this many slaves and this detector, or a ``ValueError``."""
     if not isinstance(sizes, Sizes):
@@ -225,7 +243,7 @@ def check_sizes(sizes, num_slaves: int, for_paths: bool):
         raise ValueError(f"sizes were made for the other query; this one needs sizes for {wanted}")
 
 
-def _concrete_only(name: str, values, hint: str | None = None):
+def require_concrete(name: str, values, hint: str | None = None):
     """A ``ValueError`` when ``values`` are traced: sizes are measured on the host."""
     if any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree.leaves(values)):
         hint = hint or (
@@ -268,7 +286,7 @@ def bucket_sort(x: Array, surface: Surface, *, radius, mask: Array | None = None
       True
     """
     x, surface, radius, mask = _inputs.check_contact_inputs(x, surface, radius, mask)
-    _concrete_only("bucket_sort", (x, surface, radius, mask))
+    require_concrete("bucket_sort", (x, surface, radius, mask))
     sizes = measure(x, surface, radius=radius, mask=mask)
     return contact_jit(x, surface, radius, mask, sizes=sizes)
 
@@ -293,6 +311,6 @@ def bucket_swept(
     """
     x_prev, x, mask = _inputs.check_path_inputs(x_prev, x, mask)
     surface = _inputs.check_surface(surface, x_prev.dtype)
-    _concrete_only("bucket_swept", (x_prev, x, surface, mask))
+    require_concrete("bucket_swept", (x_prev, x, surface, mask))
     sizes = measure(x, surface, x_prev=x_prev, mask=mask)
     return crossing_jit(x_prev, x, surface, mask, sizes=sizes)

@@ -192,7 +192,7 @@ class Search:
         if self.radius is None and x_prev is None:
             raise ValueError("allocate needs x_prev= for a Search without a radius (paths only)")
         hint = "allocate once outside, or start a state inside with search.init(sizes=...)"
-        _bucket._concrete_only("Search.allocate", (x, surface, x_prev, mask), hint)
+        _bucket.require_concrete("Search.allocate", (x, surface, x_prev, mask), hint)
         batched = np.ndim(x) == 3
         if batched:
             return self._allocate_batch(x, surface, x_prev, mask, at_least)
@@ -257,8 +257,7 @@ class Search:
         For a run that starts inside a compiled program: its sizes are static
         (``state.sizes``, hashable), the candidates are found here.
         """
-        x = _inputs.check_points("x", x)
-        mask = _inputs.check_mask("mask", mask, x.shape[0])
+        _, x, mask = _inputs.check_slaves(x, None, mask)
         surface = _inputs.check_surface(surface, x.dtype)
         candidates, overflow = None, jnp.zeros((), bool)
         if sizes is not None and self.radius is None:
@@ -393,15 +392,13 @@ class Search:
           ``(crossing, state)``; ``crossing`` equals ``swept(x_prev, x,
           surface, mask=mask)`` whenever ``crossing.overflow`` is False.
         """
-        x_prev, x, mask = _inputs.check_path_inputs(x_prev, x, mask)
-        surface = _inputs.check_surface(surface, x.dtype)
         if self.method == "exhaustive":
-            return _dense._swept(x_prev, x, surface, mask), state
+            return _dense.swept(x_prev, x, surface, mask=mask), state
         if state.path_sizes is None:
             raise ValueError("state has no path sizes: allocate it with x_prev=")
         _check_unbatched(state, "swept")
-        _bucket.check_sizes(state.path_sizes, x.shape[0], for_paths=True)
-        crossing = _bucket.crossing_jit(x_prev, x, surface, mask, sizes=state.path_sizes)
+        sizes = state.path_sizes
+        crossing = _bucket.sized_bucket_swept(x_prev, x, surface, mask=mask, sizes=sizes)
         return crossing, dataclasses.replace(state, overflow=state.overflow | crossing.overflow)
 
 

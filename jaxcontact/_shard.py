@@ -171,7 +171,7 @@ class _Sized:
 
 def _sized(detector, points, surface, rows, num_shards: int, arrays) -> _Sized:
     """``detector`` on one device's rows with sizes measured for them on the host."""
-    _bucket._concrete_only(f"sharded({detector.__name__})", (points, surface, rows, arrays))
+    _bucket.require_concrete(f"sharded({detector.__name__})", (points, surface, rows, arrays))
     if detector is bucket_swept:
         _, x, _ = _inputs.check_path_inputs(points[0], points[1], None)
         surface = _inputs.check_surface(surface, x.dtype)

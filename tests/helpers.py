@@ -19,7 +19,7 @@ import jax.numpy as jnp
 import numpy as np
 
 import jaxcontact
-from jaxcontact import _bucket, _inputs
+from jaxcontact import _bucket
 from tests.oracle import OracleContact, OracleCrossing, oracle_contact, oracle_crossing
 
 # Ulps of the local scale allowed for values built from a handful of
@@ -364,19 +364,6 @@ def assert_same_crossing(binned, dense, degenerate=False):
 # directly, with the input checks the public detectors make.
 
 
-def sized_bucket_sort(x, surface, *, radius, mask=None, sizes, candidates=None):
-    """Test helper: ``bucket_sort`` at the given ``Sizes`` (and reused
-    ``candidates``, from ``_bucket.find_jit``), its inputs checked as the
-    public detectors check them. Runs under ``jit`` and ``vmap`` (``sizes``
-    is static)."""
-    x, surface, radius, mask = _inputs.check_contact_inputs(x, surface, radius, mask)
-    _bucket.check_sizes(sizes, x.shape[0], for_paths=False)
-    return _bucket.contact_jit(x, surface, radius, mask, sizes=sizes, candidates=candidates)
-
-
-def sized_bucket_swept(x_prev, x, surface, *, mask=None, sizes):
-    """Test helper: ``bucket_swept`` at the given ``Sizes``, inputs checked."""
-    x_prev, x, mask = _inputs.check_path_inputs(x_prev, x, mask)
-    surface = _inputs.check_surface(surface, x.dtype)
-    _bucket.check_sizes(sizes, x.shape[0], for_paths=True)
-    return _bucket.crossing_jit(x_prev, x, surface, mask, sizes=sizes)
+# The sized forms, inputs checked: shared with Search and the benchmarks.
+sized_bucket_sort = _bucket.sized_bucket_sort
+sized_bucket_swept = _bucket.sized_bucket_swept

@@ -16,7 +16,6 @@ import platform
 import sys
 
 import jax
-import jax.numpy as jnp
 import numpy as np
 
 from jaxcontact import _bucket
@@ -87,9 +86,7 @@ def sized_contact(radius, sizes):
 
     @jax.jit
     def contact(x, surface):
-        _bucket.check_sizes(sizes, x.shape[0], for_paths=False)
-        surface = surface._replace(segments=jnp.asarray(surface.segments, jnp.int32))
-        return _bucket.contact_jit(x, surface, jnp.asarray(radius, x.dtype), None, sizes=sizes)
+        return _bucket.sized_bucket_sort(x, surface, radius=radius, sizes=sizes)
 
     return contact
 
@@ -100,9 +97,7 @@ def sized_crossing(sizes):
 
     @jax.jit
     def crossing(x_prev, x, surface):
-        _bucket.check_sizes(sizes, x.shape[0], for_paths=True)
-        surface = surface._replace(segments=jnp.asarray(surface.segments, jnp.int32))
-        return _bucket.crossing_jit(x_prev, x, surface, None, sizes=sizes)
+        return _bucket.sized_bucket_swept(x_prev, x, surface, sizes=sizes)
 
     return crossing
 
