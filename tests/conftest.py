@@ -1,15 +1,32 @@
-"""Test-wide JAX settings: float64 available, strict rank promotion."""
+"""Test-wide JAX settings: the x64 mode, strict rank promotion, markers, hypothesis.
+
+The suite runs in one of two modes, chosen when JAX starts (the flag is
+process-wide):
+
+- ``JAXCONTACT_X64=1`` (the default): ``jax_enable_x64`` on, so float64 and
+  float32 are both tested.
+- ``JAXCONTACT_X64=0``: x64 off, JAX's default and the path most users run:
+  NumPy float64 inputs become float32. Tests that need float64 skip
+  themselves: those marked ``x64`` and every case parametrized with a float64
+  dtype. Tests written for "the best float" use ``tests.helpers.FLOAT``,
+  float32 in this mode. ``tests/test_x64_off.py`` runs a chosen part of the
+  suite this way in a process of its own.
+"""
 
 import os
 
 import jax
+import numpy as np
+import pytest
 from hypothesis import HealthCheck, settings
+
+X64 = os.environ.get("JAXCONTACT_X64", "1") != "0"
 
 # tests/sharded needs 4 devices, fixed when JAX starts: tests/test_shard.py
 # runs it in a process of its own, with JAXCONTACT_SHARDED=1.
 collect_ignore = [] if os.environ.get("JAXCONTACT_SHARDED") == "1" else ["sharded"]
 
-jax.config.update("jax_enable_x64", True)
+jax.config.update("jax_enable_x64", X64)
 jax.config.update("jax_numpy_rank_promotion", "raise")
 
 # Property tests (tests/test_properties.py and others using hypothesis): a
@@ -31,3 +48,29 @@ settings.register_profile(
     suppress_health_check=[HealthCheck.too_slow],
 )
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
+
+
+def _is_float64(value) -> bool:
+    """A dtype parameter (``np.float64``, ``jnp.float64``, ``np.dtype("float64")``)."""
+    return isinstance(value, (type, np.dtype)) and np.dtype(value) == np.float64
+
+
+@pytest.hookimpl(tryfirst=True)  # before -m reads the markers added here
+def pytest_collection_modifyitems(config, items):
+    for item in items:
+        if item.nodeid.startswith("jaxcontact/sim/"):  # the simulation's doctests
+            item.add_marker(pytest.mark.simulation)
+            item.add_marker(pytest.mark.slow)
+    # The files with long tests (subprocess suites, simulations) first, so
+    # that under xdist the other worker runs the many short ones meanwhile
+    # instead of waiting on a long one at the end. Whole files, in their own
+    # order: their tests share fixtures and compiled programs.
+    slow_files = {item.path for item in items if item.get_closest_marker("slow")}
+    items.sort(key=lambda item: item.path not in slow_files)
+    if X64:
+        return
+    skip = pytest.mark.skip(reason="needs float64: x64 is off (JAXCONTACT_X64=0)")
+    for item in items:
+        params = getattr(getattr(item, "callspec", None), "params", {})
+        if item.get_closest_marker("x64") or any(map(_is_float64, params.values())):
+            item.add_marker(skip)

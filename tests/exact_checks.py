@@ -39,8 +39,10 @@ Error bounds (``ULPS`` = 8 units of eps of the dtype):
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 
@@ -72,16 +74,46 @@ def bound(dtype, scale):
     return ULPS * float(np.finfo(dtype).eps) * scale
 
 
+# The exact oracle is plain Python over rationals, slow for a thousand rows,
+# and several detectors are checked on the same scene: its answers are kept,
+# keyed by the scene's bytes.
+def _key(*arrays) -> tuple:
+    return tuple((a.dtype.str, a.shape, a.tobytes()) for a in map(np.asarray, arrays))
+
+
+def _arrays(key) -> list[np.ndarray]:
+    return [np.frombuffer(data, dtype).reshape(shape) for dtype, shape, data in key]
+
+
+@functools.lru_cache(maxsize=64)
+def _exact_contacts(key, radius):
+    x, nodes, segments, seg_mask = _arrays(key)
+    expected = oracle.oracle_contact(x, nodes, segments, seg_mask, None, radius)
+    pairs = [
+        {p.segment: p for p in oracle.exact_pairs(row, nodes, segments, seg_mask)} for row in x
+    ]
+    return expected, pairs
+
+
+@functools.lru_cache(maxsize=64)
+def _exact_meetings(key):
+    x_prev, x, nodes, segments, seg_mask = _arrays(key)
+    return [
+        {m.segment: m for m in oracle.exact_meetings(start, end, nodes, segments, seg_mask)}
+        for start, end in zip(x_prev, x, strict=True)
+    ]
+
+
 def check_contact(contact, scene: Scene, dtype):
     """Every row of ``contact`` against the exact oracle, within the module's bounds."""
+    contact = jax.tree.map(np.asarray, contact)  # read row by row: NumPy, not a dispatch each
     assert_all_finite(contact)
     assert not bool(contact.overflow)
-    expected = oracle.oracle_contact(
-        scene.x, scene.nodes, scene.segments, scene.seg_mask, None, scene.radius
+    expected, every_pairs = _exact_contacts(
+        _key(scene.x, scene.nodes, scene.segments, scene.seg_mask), float(scene.radius)
     )
     for row in range(len(scene.x)):
-        pairs = {p.segment: p for p in oracle.exact_pairs(
-            scene.x[row], scene.nodes, scene.segments, scene.seg_mask)}  # fmt: skip
+        pairs = every_pairs[row]
         if not pairs:
             assert not contact.found[row]
             continue
@@ -151,12 +183,14 @@ def fragile(meeting: oracle.ExactMeeting, dtype) -> bool:
 
 def check_crossing(crossing, scene: Scene, dtype):
     """Every row of ``crossing`` against the exact oracle, within the module's bounds."""
+    crossing = jax.tree.map(np.asarray, crossing)
     assert_all_finite(crossing)
     assert not bool(crossing.overflow)
+    every_meetings = _exact_meetings(
+        _key(scene.x_prev, scene.x, scene.nodes, scene.segments, scene.seg_mask)
+    )
     for row in range(len(scene.x)):
-        path = scene.x_prev[row], scene.x[row]
-        meetings = {m.segment: m for m in oracle.exact_meetings(
-            *path, scene.nodes, scene.segments, scene.seg_mask)}  # fmt: skip
+        meetings = every_meetings[row]
         hits = [m for m in meetings.values() if m.t is not None]
         first = min(hits, key=lambda m: (m.t, m.segment)) if hits else None
         chosen = int(crossing.segment[row])

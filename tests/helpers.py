@@ -13,8 +13,13 @@ the last place (ulps) of a length that the test names:
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
+from pathlib import Path
 from typing import NamedTuple
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 
@@ -28,6 +33,15 @@ LOCAL_ULPS = {np.dtype(np.float32): 8, np.dtype(np.float64): 8}
 
 FLOAT_DTYPES = (np.float32, np.float64)
 
+# The widest float of the suite's mode (tests/conftest.py): float64 with x64
+# on, float32 with it off, as NumPy float64 inputs are then computed. Tests
+# that ask for precision rather than for a dtype use this one, so they run in
+# both modes.
+FLOAT = np.dtype(jax.dtypes.canonicalize_dtype(np.float64)).type
+X64 = FLOAT is np.float64
+# The float dtypes this mode computes in: what hypothesis draws from.
+MODE_DTYPES = FLOAT_DTYPES if X64 else (np.float32,)
+
 
 def eps(dtype) -> float:
     return float(np.finfo(np.dtype(dtype)).eps)
@@ -36,6 +50,13 @@ def eps(dtype) -> float:
 def local_atol(dtype, scale: float = 1.0) -> float:
     """Absolute tolerance for a value of size ``scale`` computed in ``dtype``."""
     return LOCAL_ULPS[np.dtype(dtype)] * eps(dtype) * scale
+
+
+def gradient_atol(dtype) -> float:
+    """Gradients of the same pair from two compiled programs (a detector and
+    the dense one), which contract into fused multiply-adds differently:
+    4,500 eps, 1e-12 in float64."""
+    return 4500 * eps(dtype)
 
 
 def coordinate_ulp(dtype, offset: float) -> float:
@@ -133,7 +154,7 @@ def random_scene(
     seed: int,
     num_slaves: int,
     num_segments: int,
-    dtype=np.float64,
+    dtype=FLOAT,
     *,
     masked: bool = False,
     offset: float = 0.0,
@@ -261,7 +282,7 @@ def assert_padding_leaves_real_rows_unchanged(checked_scene, fill: float, fields
 CAPACITY = (6, 8, 5)
 
 
-def padded_scene(x_prev, x, nodes, segments, *, radius=0.0, dtype=np.float64) -> Scene:
+def padded_scene(x_prev, x, nodes, segments, *, radius=0.0, dtype=FLOAT) -> Scene:
     """A hand-made scene padded to ``CAPACITY`` with masked rows after the real ones."""
     x_prev = np.asarray(x_prev, dtype).reshape(-1, 2)
     x = np.asarray(x, dtype).reshape(-1, 2)
@@ -367,3 +388,22 @@ def assert_same_crossing(binned, dense, degenerate=False):
 # The sized forms, inputs checked: shared with Search and the benchmarks.
 sized_bucket_sort = _bucket.sized_bucket_sort
 sized_bucket_swept = _bucket.sized_bucket_swept
+
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def assert_pytest_passes_in_subprocess(args, env, timeout=900):
+    """``python -m pytest -q args`` in a process of its own, its environment
+    ``os.environ`` updated with ``env`` (what JAX fixes when it starts: the
+    device count, the x64 mode), passes."""
+    done = subprocess.run(
+        [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", *args],
+        cwd=ROOT,
+        env={**os.environ, **env},
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+    )
+    assert done.returncode == 0, done.stdout[-6000:] + done.stderr[-3000:]
+    assert " passed" in done.stdout

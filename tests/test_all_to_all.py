@@ -13,6 +13,9 @@ from jaxcontact.scenes import paper_scene
 from tests import helpers
 from tests.oracle import oracle_contact
 
+# All of this file runs again with x64 off (tests/test_x64_off.py).
+pytestmark = pytest.mark.x64_off
+
 # Jitted once at module level so scenes of equal shapes share one compilation.
 all_to_all = jax.jit(jaxcontact.all_to_all)
 
@@ -23,7 +26,7 @@ SQUARE_NODES = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]
 SQUARE_SEGMENTS = [[0, 1], [1, 2], [2, 3], [3, 0]]
 
 
-def checked_contact(x, nodes, segments, *, radius, dtype=np.float64):
+def checked_contact(x, nodes, segments, *, radius, dtype=helpers.FLOAT):
     """Runs ``all_to_all`` on a hand-made scene (padded to ``helpers.CAPACITY``),
     checks every field against the oracle and returns the rows of the real slaves."""
     scene = helpers.padded_scene(x, x, nodes, segments, radius=radius, dtype=dtype)
@@ -47,8 +50,8 @@ def checked_scene(scene: helpers.Scene, **tolerance):
     return contact
 
 
-# Sizes in float64 only (float32 random scenes are compared below and in
-# test_transforms.py): each size is a compilation.
+# Sizes in the widest float only (float32 random scenes are compared below
+# and in test_transforms.py): each size is a compilation.
 @pytest.mark.parametrize("num_segments", [0, 1, 5])
 @pytest.mark.parametrize("num_slaves", [0, 1, 9])
 def test_matches_oracle_on_random_masked_scenes(num_slaves, num_segments):
@@ -73,7 +76,7 @@ def test_first_index_wins_a_tie_across_segment_blocks():
     # reduction is run directly with ``unroll=4, block=4``: ten segments take
     # three blocks, the last one ragged. The second half repeats the first, so
     # every slave ties exactly between k and k + 5 and must get the lower index.
-    scene = helpers.random_scene(7, 9, 5, np.float64)
+    scene = helpers.random_scene(7, 9, 5)
     doubled = np.concatenate([scene.segments, scene.segments])
     starts, ends = scene.nodes[doubled[:, 0]], scene.nodes[doubled[:, 1]]
     pair_value = jax.vmap(squared_distance, in_axes=(0, None, None))
@@ -95,7 +98,7 @@ def test_first_index_wins_a_tie_across_segment_blocks():
     surface = Surface(jnp.asarray(scene.nodes), jnp.asarray(doubled))
     contact = all_to_all(jnp.asarray(scene.x), surface, radius=10.0)
     expected = oracle_contact(scene.x, scene.nodes, doubled, radius=10.0)
-    helpers.assert_contact_matches(contact, expected, np.float64)
+    helpers.assert_contact_matches(contact, expected, helpers.FLOAT)
     assert np.all(expected.segment < 5)
 
 
@@ -287,12 +290,14 @@ def test_radius_boundary_is_inclusive_at_a_corner(dtype):
     np.testing.assert_array_equal(contact.found, [True, False])
 
 
-def test_zero_radius_finds_only_slaves_on_the_surface():
-    # The smallest normal float64 above the floor. (Not a subnormal: XLA on the
-    # CPU flushes subnormals to zero, so no JAX program can see them.)
-    off = np.finfo(np.float64).tiny
-    slaves = [[0.5, 0.0], [2.0, 0.0], [0.0, 0.0], [0.5, off], [0.5, 1e-300]]
-    contact = checked_contact(slaves, [[2.0, 0.0], [0.0, 0.0]], [[0, 1]], radius=0.0)
+@DTYPES
+def test_zero_radius_finds_only_slaves_on_the_surface(dtype):
+    # The smallest normal float above the floor, and one whose square
+    # underflows too. (Not a subnormal: XLA on the CPU flushes subnormals to
+    # zero, so no JAX program can see them.)
+    off = np.finfo(dtype).tiny
+    slaves = [[0.5, 0.0], [2.0, 0.0], [0.0, 0.0], [0.5, off], [0.5, off * 1e8]]
+    contact = checked_contact(slaves, [[2.0, 0.0], [0.0, 0.0]], [[0, 1]], radius=0.0, dtype=dtype)
     np.testing.assert_array_equal(contact.found, [True, True, True, False, False])
     np.testing.assert_array_equal(contact.gap, np.zeros(5))
 

@@ -14,7 +14,7 @@ from jaxcontact import (
 )
 from jaxcontact._sizes import measure
 from jaxcontact.scenes import cutting_scene, rough_die_scene
-from tests.helpers import assert_same_contact, assert_same_crossing
+from tests.helpers import FLOAT, assert_same_contact, assert_same_crossing
 
 # The tool in, half in and clear of the workpiece: very different needs.
 TIPS = (12.0, 18.0, 20.5)
@@ -111,7 +111,7 @@ def test_allocate_checks_the_batch_shape():
 
 
 def test_dense_detectors_and_forces_map_over_a_batch():
-    scenes, x_prev, x, surface, mask = _batch(jnp.float64)
+    scenes, x_prev, x, surface, mask = _batch(FLOAT)
     contact = jax.vmap(lambda x, s, m: all_to_all(x, s, radius=RADIUS, mask=m))(x, surface, mask)
     crossing = jax.vmap(lambda p, x, s, m: swept(p, x, s, mask=m))(x_prev, x, surface, mask)
     forces, on_tool = jax.vmap(lambda c: contact_forces(c, 1e3))(contact)
@@ -127,7 +127,7 @@ def test_dense_detectors_and_forces_map_over_a_batch():
 
 
 def test_contact_forces_push_active_slaves_out_and_balance_on_the_master():
-    scene = cutting_scene(2_000, 18.0, dtype=jnp.float64)
+    scene = cutting_scene(2_000, 18.0, dtype=FLOAT)
     contact = all_to_all(scene.x, scene.surface, radius=RADIUS)
     assert int(contact.active.sum()) > 0
     on_slaves, on_master = contact_forces(contact, 2.0)
@@ -154,6 +154,7 @@ def test_a_batch_with_nothing_near_in_one_scene_still_bins_many_segments_in_cell
     assert state.sizes.use_cells
 
 
+@pytest.mark.x64  # equal to 1e-10: float64
 @pytest.mark.parametrize("detector", ["all_to_all", "search"])
 def test_gradients_through_a_vmapped_detector_equal_a_loop(detector):
     # The searches run through custom_vmap (scene by scene) on stop_gradient

@@ -267,6 +267,7 @@ def test_crossing_matches_exact_oracle_at_hard_places(name, dtype, data):
     check_bad_rows_ignored(run, crossing, rows, "crossed")
 
 
+@pytest.mark.x64  # checked as float64 scenes
 def test_plain_bucket_calls_measure_their_sizes_with_and_without_cells():
     # The one-call bucket detectors measure their own sizes: with NUM_SEGMENTS
     # (> 48) segments those bin them in cells, with a few they do not.

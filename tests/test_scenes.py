@@ -57,6 +57,7 @@ def test_cutting_scene_shapes(num_nodes):
     assert not np.any(np.asarray(cutting_scene(num_nodes, 18.0).x) - np.asarray(scene.x))
 
 
+@pytest.mark.x64  # float64 scenes, compared to 1e-12 or exactly
 @pytest.mark.parametrize("num_nodes, num_segments", [(80, 4), (1000, 50)])
 def test_rough_die_scene_shapes_and_upward_normals(num_nodes, num_segments):
     scene = rough_die_scene(num_nodes, num_segments, dtype=jnp.float64)
@@ -75,6 +76,7 @@ def test_rough_die_scene_shapes_and_upward_normals(num_nodes, num_segments):
     assert np.all(normal[:, 1] > np.abs(normal[:, 0]))  # outward normals point up
 
 
+@pytest.mark.x64  # float64 scenes, compared to 1e-12 or exactly
 @pytest.mark.parametrize("x_tip", [2.0, 18.0])
 def test_cutting_tool_outline_is_closed_counter_clockwise_with_20_segments(x_tip):
     surface = cutting_scene(100, x_tip, dtype=jnp.float64).surface

@@ -12,30 +12,22 @@ from pathlib import Path
 
 import jax
 import numpy as np
+import pytest
 from jax.sharding import PartitionSpec as P
 
 from jaxcontact import all_to_all, sharded
 from jaxcontact.scenes import cutting_scene
+from tests.helpers import assert_pytest_passes_in_subprocess
 
 ROOT = Path(__file__).resolve().parent.parent
 
 
+@pytest.mark.multidevice
+@pytest.mark.slow
 def test_sharded_suite_on_four_cpu_devices():
-    env = dict(os.environ)
-    env["XLA_FLAGS"] = (
-        env.get("XLA_FLAGS", "") + " --xla_force_host_platform_device_count=4"
-    ).strip()
-    env["JAXCONTACT_SHARDED"] = "1"
-    done = subprocess.run(
-        [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "tests/sharded"],
-        cwd=ROOT,
-        env=env,
-        capture_output=True,
-        text=True,
-        timeout=900,
-    )
-    assert done.returncode == 0, done.stdout[-6000:] + done.stderr[-3000:]
-    assert " passed" in done.stdout
+    flags = os.environ.get("XLA_FLAGS", "") + " --xla_force_host_platform_device_count=4"
+    env = {"XLA_FLAGS": flags.strip(), "JAXCONTACT_SHARDED": "1"}
+    assert_pytest_passes_in_subprocess(["tests/sharded"], env)
 
 
 def test_sharded_on_one_device_is_the_detector():
@@ -67,6 +59,8 @@ def _summary(process) -> str:
     return out
 
 
+@pytest.mark.multidevice
+@pytest.mark.slow
 def test_multihost_example_runs_on_one_host_and_on_two_processes():
     one = _summary(_example(devices=4))
     assert "1 process(es), 4 device(s)" in one

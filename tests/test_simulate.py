@@ -18,6 +18,8 @@ from jaxcontact.scenes import cutting_tool_outline
 from jaxcontact.sim import mean_cutting_force, ploughing, run, simulate, tool_outline
 from jaxcontact.sim.demo import run_demo
 
+pytestmark = [pytest.mark.simulation, pytest.mark.slow, pytest.mark.x64]
+
 # The stated bound on penetration, as a fraction of the grid spacing (the
 # search radius): the default penalty (10 E per node) keeps it below this.
 PENETRATION_FRACTION = 0.15

@@ -8,6 +8,9 @@ import pytest
 import jaxcontact
 from tests import helpers
 
+# All of this file runs again with x64 off (tests/test_x64_off.py).
+pytestmark = pytest.mark.x64_off
+
 # Jitted once at module level so scenes of equal shapes share one compilation.
 swept = jax.jit(jaxcontact.swept)
 
@@ -30,7 +33,7 @@ def checked_scene(scene: helpers.Scene, **tolerance):
     return crossing
 
 
-def checked_crossing(x_prev, x, nodes, segments, *, dtype=np.float64):
+def checked_crossing(x_prev, x, nodes, segments, *, dtype=helpers.FLOAT):
     """Runs ``swept`` on a hand-made scene (padded to ``helpers.CAPACITY``),
     checks every field against the oracle and returns the rows of the real slaves."""
     crossing = checked_scene(helpers.padded_scene(x_prev, x, nodes, segments, dtype=dtype))
@@ -40,14 +43,15 @@ def checked_crossing(x_prev, x, nodes, segments, *, dtype=np.float64):
 
 
 def assert_crossings(crossing, segment, t, point):
+    """Exactly these rows: ``t`` and ``point`` rounded to the crossing's dtype."""
     np.testing.assert_array_equal(crossing.segment, segment)
     np.testing.assert_array_equal(crossing.crossed, np.asarray(segment) >= 0)
-    np.testing.assert_array_equal(crossing.t, t)
-    np.testing.assert_array_equal(crossing.point, point)
+    np.testing.assert_array_equal(crossing.t, np.asarray(t, crossing.t.dtype))
+    np.testing.assert_array_equal(crossing.point, np.asarray(point, crossing.point.dtype))
 
 
-# Sizes in float64 only (float32 random scenes are compared below and in
-# test_transforms.py): each size is a compilation.
+# Sizes in the widest float only (float32 random scenes are compared below
+# and in test_transforms.py): each size is a compilation.
 @pytest.mark.parametrize("num_segments", [0, 1, 5])
 @pytest.mark.parametrize("num_slaves", [0, 1, 9])
 def test_matches_oracle_on_random_masked_scenes(num_slaves, num_segments):

@@ -9,6 +9,9 @@ import pytest
 import jaxcontact
 from tests import helpers
 
+# All of this file runs again with x64 off (tests/test_x64_off.py).
+pytestmark = pytest.mark.x64_off
+
 DTYPES = pytest.mark.parametrize("dtype", helpers.FLOAT_DTYPES, ids=lambda d: np.dtype(d).name)
 BATCH = 3
 
@@ -57,13 +60,14 @@ def run_jit(name, scenes):
 def run_vmap(name, scenes):
     # One batched call over BATCH scenes of equal shapes: slaves, nodes,
     # segments, both masks and the radius all carry the batch axis. The radii
-    # are float64 whatever the scenes' dtype: a float32 scene must stay float32.
+    # are the widest float whatever the scenes' dtype (float64 with x64 on): a
+    # float32 scene must stay float32.
     function, call = FUNCTIONS[name][:2]
     batched = [scene_args(name, scene) for scene in scenes]
     stacked = jax.tree.map(
         lambda *leaves: jnp.stack([jnp.asarray(leaf) for leaf in leaves]), *batched
     )
-    radius = jnp.asarray([scene.radius for scene in scenes], jnp.float64)
+    radius = jnp.asarray(np.asarray([scene.radius for scene in scenes], np.float64))
     stacked = stacked[:3] + (radius,) + stacked[4:]
     # Jitted too: vmap's batching rules are what is under test, and eager
     # op-by-op dispatch of the batched program would only cost seconds.
@@ -116,6 +120,6 @@ def test_second_call_with_same_shapes_does_not_retrace(name):
         return call(function, *args)
 
     # Different coordinates, masks and radius, same shapes and dtypes.
-    first, second = batch_of_scenes(np.float64)[:2]
+    first, second = batch_of_scenes(helpers.FLOAT)[:2]
     run(*scene_args(name, first))
     run(*scene_args(name, second))

@@ -12,6 +12,9 @@ import jaxcontact
 from jaxcontact import Search, Surface
 from jaxcontact._sizes import measure
 
+# All of this file runs again with x64 off (tests/test_x64_off.py).
+pytestmark = pytest.mark.x64_off
+
 X = np.array([[0.5, 0.25], [1.5, -0.5]])
 NODES = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]])
 SEGMENTS = np.array([[0, 1], [1, 2]], np.int32)
@@ -100,7 +103,23 @@ BAD_SHAPES_AND_DTYPES = {
 }
 
 
-@pytest.mark.parametrize("case", list(BAD_SHAPES_AND_DTYPES))
+# Two float dtypes mixed: with x64 off both are float32 as JAX computes them,
+# which docs/contract.md accepts (the last test below).
+MIXED_FLOATS = {
+    "nodes_float32_x_float64",
+    "nodes_float64_x_float32",
+    "swept_x_dtype_differs",
+    "swept_nodes_dtype_differs",
+}
+
+
+@pytest.mark.parametrize(
+    "case",
+    [
+        pytest.param(case, marks=[pytest.mark.x64] if case in MIXED_FLOATS else [])
+        for case in BAD_SHAPES_AND_DTYPES
+    ],
+)
 def test_bad_shape_or_dtype_raises_naming_the_argument(case):
     name, call = BAD_SHAPES_AND_DTYPES[case]
     with pytest.raises(ValueError, match=rf"^{re.escape(name)}\b(?!\.)"):
@@ -111,10 +130,15 @@ def test_bad_shape_or_dtype_raises_naming_the_argument(case):
 def test_bad_shapes_raise_at_trace_time(transform):
     with pytest.raises(ValueError, match=r"^x\b(?!\.)"):
         transform(contact)(np.zeros((2, 3)))
-    with pytest.raises(ValueError, match=r"^surface\.nodes\b"):
-        transform(contact)(X, SURFACE._replace(nodes=jnp.asarray(NODES, jnp.float32)))
     with pytest.raises(ValueError, match=r"^x\b(?!\.)"):
         transform(crossing)(X, np.zeros((3, 2)))
+
+
+@pytest.mark.x64
+@TRANSFORMS
+def test_mixed_float_dtypes_raise_at_trace_time(transform):
+    with pytest.raises(ValueError, match=r"^surface\.nodes\b"):
+        transform(contact)(X, SURFACE._replace(nodes=jnp.asarray(NODES, jnp.float32)))
 
 
 def test_surface_must_be_a_surface():
@@ -159,6 +183,19 @@ def allocated(radius):
     return search, search.allocate(X, SURFACE, x_prev=X)
 
 
+@functools.cache
+def jitted_detectors():
+    """Every detector jitted once for the module, on a surface argument: one
+    compilation per surface shape, whatever the bad indices."""
+    search, state = allocated(2.0)
+    return (
+        jax.jit(lambda s: jaxcontact.all_to_all(X, s, radius=2.0)),
+        jax.jit(lambda s: jaxcontact.swept(X, X[::-1], s)),
+        jax.jit(lambda s: search.closest(search.init(X, s, sizes=state.sizes), X, s)[0]),
+        jax.jit(lambda s: search.swept(state, X[::-1], X, s)[0]),
+    )
+
+
 @pytest.mark.parametrize("bad", [[1, 3], [-1, 2], [7, -5]])
 def test_segment_index_out_of_range_under_jit_is_not_a_segment(bad):
     # Under jit the indices cannot be checked; the gather would clamp them to
@@ -168,13 +205,7 @@ def test_segment_index_out_of_range_under_jit_is_not_a_segment(bad):
     segments = jnp.asarray([[0, 1], bad], jnp.int32)
     surface = SURFACE._replace(segments=segments)
     only_good = Surface(SURFACE.nodes, segments[:1])
-    search, state = allocated(2.0)
-    for detect in (
-        jax.jit(lambda s: jaxcontact.all_to_all(X, s, radius=2.0)),
-        jax.jit(lambda s: jaxcontact.swept(X, X[::-1], s)),
-        jax.jit(lambda s: search.closest(search.init(X, s, sizes=state.sizes), X, s)[0]),
-        jax.jit(lambda s: search.swept(state, X[::-1], X, s)[0]),
-    ):
+    for detect in jitted_detectors():
         got, expected = detect(surface), detect(only_good)
         for field, value in zip(got._fields, got, strict=True):
             np.testing.assert_array_equal(value, getattr(expected, field), err_msg=field)
@@ -320,11 +351,38 @@ def test_every_detector_takes_empty_inputs(empty, detector, transform):
 
 
 def test_numpy_float64_inputs_with_x64_off_are_computed_in_float32():
-    # Regression: with x64 off, x (NumPy float64) became float32 but the
-    # nodes (NumPy float64) were compared as float64, so a plain NumPy call
-    # raised "must have the slaves' dtype float32; got ... float32".
+    # With x64 off (JAX's default), NumPy float64 arrays, float64 radii and
+    # int64 indices become float32 and int32: mixed with float32 arrays they
+    # have the same dtype as JAX computes them (docs/contract.md, Dtypes), so
+    # every detector accepts them and every float result is float32.
+    # Regression: x (NumPy float64) became float32 but the nodes (NumPy
+    # float64) were compared as float64, so a plain NumPy call raised "must
+    # have the slaves' dtype float32; got ... float32".
+    # Fresh arrays: under jax.enable_x64(False) in a process with x64 on, JAX
+    # may reuse the float64 device copy of a NumPy array that a jitted
+    # function captured earlier (X, above). A process with x64 off from the
+    # start (tests/test_x64_off.py) has no such copy.
+    double, nodes64, single = X.copy(), NODES.copy(), X.astype(np.float32)
     with jax.enable_x64(False):
-        contact = jaxcontact.all_to_all(X, Surface(NODES, SEGMENTS), radius=0.5)
-        crossing = jaxcontact.swept(X, X[::-1], Surface(NODES, SEGMENTS))
-    assert contact.gap.dtype == np.float32 and crossing.t.dtype == np.float32
-    assert bool(contact.found[0]) and bool(crossing.crossed.any())
+        search = Search(radius=0.5)
+        for x, nodes in ((double, nodes64), (double, NODES.astype(np.float32)), (single, nodes64)):
+            surface = Surface(nodes, SEGMENTS.astype(np.int64))
+            radius = np.float64(0.5)
+            state = search.allocate(x, surface, x_prev=single)
+            contacts = [
+                jaxcontact.all_to_all(x, surface, radius=radius),
+                jaxcontact.bucket_sort(x, surface, radius=radius),
+                search.closest(state, x, surface)[0],
+            ]
+            crossings = [
+                jaxcontact.swept(single[::-1], x, surface),
+                jaxcontact.bucket_swept(single[::-1], x, surface),
+                search.swept(state, single[::-1], x, surface)[0],
+            ]
+            jaxcontact.validate(x, surface, radius=radius, x_prev=single)
+            for contact in contacts:
+                assert contact.gap.dtype == contact.point.dtype == np.float32
+                assert contact.segment.dtype == np.int32 and bool(contact.found[0])
+            for crossing in crossings:
+                assert crossing.t.dtype == crossing.point.dtype == np.float32
+                assert crossing.segment.dtype == np.int32 and bool(crossing.crossed.any())

@@ -1,0 +1,23 @@
+"""The default path: a sizeable part of the suite again with x64 off, in a process of its own.
+
+tests/conftest.py turns ``jax_enable_x64`` on, so that float64 is tested;
+most users run with it off (JAX's default), where NumPy float64 inputs,
+float64 radii and int64 indices become 32-bit. The flag is fixed when JAX
+starts, so the tests marked ``x64_off`` run again in a subprocess with
+``JAXCONTACT_X64=0``: every detector (``all_to_all``, ``swept``,
+``bucket_sort``, ``bucket_swept``), the ``Search`` object, batches, the
+validation errors, gradients, transforms and the dtype rules, with the tests
+that need float64 skipped (conftest.py). By hand, the same:
+``JAXCONTACT_X64=0 python -m pytest -q -n 2 -m x64_off``; the whole suite
+that way: ``JAXCONTACT_X64=0 python -m pytest -q -n 2``.
+"""
+
+import pytest
+
+from tests.helpers import X64, assert_pytest_passes_in_subprocess
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not X64, reason="this process runs with x64 off already")
+def test_the_default_path_with_x64_off():
+    assert_pytest_passes_in_subprocess(["-m", "x64_off", "tests"], {"JAXCONTACT_X64": "0"})
