@@ -35,7 +35,8 @@ from jaxcontact._geometry import first_hit_time, squared_distance
 from jaxcontact._inputs import Segments
 from jaxcontact._lowest import one_scene_at_a_time
 from jaxcontact._narrow import Queries, choose, in_stages
-from jaxcontact._sizes import Sizes, measure
+from jaxcontact._padded import cut_rows, pad_scene
+from jaxcontact._sizes import CELLS_ABOVE, Sizes, measure
 from jaxcontact._types import Array, Contact, Crossing, Surface
 from jaxcontact._writeback import empty_contact, empty_crossing, scatter_blocks
 
@@ -287,8 +288,10 @@ def bucket_sort(x: Array, surface: Surface, *, radius, mask: Array | None = None
     """
     x, surface, radius, mask = _inputs.check_contact_inputs(x, surface, radius, mask)
     require_concrete("bucket_sort", (x, surface, radius, mask))
-    sizes = measure(x, surface, radius=radius, mask=mask)
-    return contact_jit(x, surface, radius, mask, sizes=sizes)
+    use_cells = surface.segments.shape[0] > CELLS_ABOVE
+    (x,), mask, surface, num_rows = pad_scene((x,), mask, surface)
+    sizes = measure(x, surface, radius=radius, mask=mask, use_cells=use_cells)
+    return cut_rows(contact_jit(x, surface, radius, mask, sizes=sizes), num_rows)
 
 
 def bucket_swept(
@@ -312,5 +315,7 @@ def bucket_swept(
     x_prev, x, mask = _inputs.check_path_inputs(x_prev, x, mask)
     surface = _inputs.check_surface(surface, x_prev.dtype)
     require_concrete("bucket_swept", (x_prev, x, surface, mask))
-    sizes = measure(x, surface, x_prev=x_prev, mask=mask)
-    return crossing_jit(x_prev, x, surface, mask, sizes=sizes)
+    use_cells = surface.segments.shape[0] > CELLS_ABOVE
+    (x_prev, x), mask, surface, num_rows = pad_scene((x_prev, x), mask, surface)
+    sizes = measure(x, surface, x_prev=x_prev, mask=mask, use_cells=use_cells)
+    return cut_rows(crossing_jit(x_prev, x, surface, mask, sizes=sizes), num_rows)
