@@ -99,7 +99,7 @@ def expired(candidates: Candidates, x, surface: Surface, mask, skin) -> Array:
 
     row_ok = _inputs.rows_ok(x, mask)
     segments = _inputs.resolve_segments(surface)
-    ends_then = candidates.nodes[jnp.clip(segments.indices, 0, candidates.nodes.shape[0] - 1)]
+    ends_then = _inputs.ends_of(candidates.nodes, segments.indices)
     ends_now = jnp.stack([segments.start, segments.end], axis=1)
     end_moves = jnp.max(jnp.sum((ends_now - ends_then) ** 2, axis=-1), axis=-1)
     rows_moved = largest(jnp.sum((x - candidates.reference) ** 2, axis=-1), row_ok)

@@ -37,8 +37,9 @@ def all_to_all(x: Array, surface: Surface, *, radius, mask: Array | None = None)
       always False. Costs O(N M) time and O(N + M) memory.
 
     Raises:
-      ValueError: on a wrong shape or dtype, and (outside ``jit``) on segment
-        indices out of range or a negative or non-finite radius.
+      ValueError: on a wrong shape or dtype, and (outside ``jit``) on a real
+        segment's index out of range (masked segments' indices may be
+        anything) or a negative or non-finite radius.
 
     Example:
       >>> import jax.numpy as jnp
