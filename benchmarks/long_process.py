@@ -14,7 +14,8 @@ This script counts the lines of ``/proc/self/maps`` in one process:
    ``--largest``, log-spaced), one process; programs compiled (the
    detector's jit caches) and maps added, in total and per call. Plain calls
    pad to size classes (``jaxcontact._padded``), so most shapes reuse a
-   program.
+   program. Each sweep starts after ``jax.clear_caches()``, which frees the
+   maps of the sweep before (so the script itself stays under the limit).
 
 The scenes are the cutting scene (docs/scenes.md) at the requested node
 count, tool tip at ``x = 18``, float32 (20 segments: no cells) and, for the
@@ -83,6 +84,7 @@ def per_program(num_shapes: int) -> list[str]:
     rows = []
     for name, call, _ in detectors():
         for binned in (False, True):
+            jax.clear_caches()
             added = []
             for num_nodes in np.linspace(2_000, 3_000, num_shapes).astype(int):
                 scene = scene_at(int(num_nodes), binned)
@@ -107,6 +109,8 @@ def sweep(num_shapes: int, smallest: int, largest: int) -> list[str]:
     rows = []
     for name, call, programs in detectors():
         for binned in (False, True):
+            # Each sweep starts from empty caches, as a fresh process would.
+            jax.clear_caches()
             before_programs = sum(program._cache_size() for program in programs)
             before = maps()
             for num_nodes in counts:
