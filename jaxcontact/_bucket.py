@@ -35,6 +35,7 @@ from jaxcontact._geometry import first_hit_time, squared_distance
 from jaxcontact._inputs import Segments
 from jaxcontact._lowest import one_scene_at_a_time
 from jaxcontact._narrow import Queries, choose, in_stages
+from jaxcontact._placement import searched_whole
 from jaxcontact._sizes import Sizes, measure
 from jaxcontact._types import Array, Contact, Crossing, Surface
 from jaxcontact._writeback import empty_contact, empty_crossing, scatter_blocks
@@ -54,6 +55,7 @@ class Candidates(NamedTuple):
     overflow: Array  # bool[]  the sizes were too small when they were found
 
 
+@searched_whole(rows="x")
 def find(x, surface: Surface, reach, mask, sizes: Sizes) -> Candidates:
     """``Candidates`` within ``reach`` (the radius plus the skin)."""
     slave_ok = _inputs.rows_ok(x, mask)
@@ -156,6 +158,7 @@ def _search_kept(queries: Queries, blocks: Blocks, segments: Segments, boxes, li
     )
 
 
+@searched_whole(rows="x")
 def _contact(x, surface, radius, mask, sizes: Sizes, candidates: Candidates | None = None):
     # Bad rows are left in ``x``: the box reductions skip them, and the kept
     # rows are zeroed when gathered, so no pass over all N rows copies x.
@@ -181,6 +184,7 @@ def _contact(x, surface, radius, mask, sizes: Sizes, candidates: Candidates | No
     return result._replace(overflow=result.overflow | overflow)
 
 
+@searched_whole(rows="x")
 def _crossing(x_prev, x, surface, mask, sizes: Sizes):
     slave_ok = _inputs.paths_ok(x_prev, x, mask)
     segments = _inputs.resolve_segments(surface)
