@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import contextlib
 import inspect
+import re
 from typing import NamedTuple
 
 import jax
@@ -217,6 +218,11 @@ def test_a_batch_split_over_its_scenes(axis_type):
     _assert_same("vmapped closest", got, want)
 
 
+def _printed(jaxpr) -> str:
+    # Some JAX versions print the address of a closed-over function.
+    return re.sub(r"0x[0-9a-f]+", "0x", str(jaxpr))
+
+
 def test_inputs_not_split_over_explicit_axes_trace_to_the_same_program():
     # One device, replicated on explicit axes, split on auto axes: the
     # programs gather nothing, so they are what they were without it.
@@ -230,7 +236,7 @@ def test_inputs_not_split_over_explicit_axes_trace_to_the_same_program():
     }.items():
         got = jax.make_jaxpr(_dense._all_to_all)(x_in, surface, radius, None)
         want = jax.make_jaxpr(unwrapped)(x_in, surface, radius, None)
-        assert str(got) == str(want), name
+        assert _printed(got) == _printed(want), name
     split = _put(jax.make_mesh((4,), ("d",)), x, P("d"))
     got = jax.make_jaxpr(_dense._all_to_all)(split, surface, radius, None)
     assert "reshard" in str(got)
