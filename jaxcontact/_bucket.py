@@ -36,6 +36,7 @@ from jaxcontact._inputs import Segments
 from jaxcontact._lowest import one_scene_at_a_time
 from jaxcontact._narrow import Queries, choose, in_stages
 from jaxcontact._padded import cut_rows, pad_scene
+from jaxcontact._placement import searched_whole
 from jaxcontact._sizes import CELLS_ABOVE, Sizes, measure
 from jaxcontact._types import Array, Contact, Crossing, Surface
 from jaxcontact._writeback import empty_contact, empty_crossing, scatter_blocks
@@ -55,6 +56,7 @@ class Candidates(NamedTuple):
     overflow: Array  # bool[]  the sizes were too small when they were found
 
 
+@searched_whole(rows="x")
 def find(x, surface: Surface, reach, mask, sizes: Sizes) -> Candidates:
     """``Candidates`` within ``reach`` (the radius plus the skin)."""
     slave_ok = _inputs.rows_ok(x, mask)
@@ -157,6 +159,7 @@ def _search_kept(queries: Queries, blocks: Blocks, segments: Segments, boxes, li
     )
 
 
+@searched_whole(rows="x")
 def _contact(x, surface, radius, mask, sizes: Sizes, candidates: Candidates | None = None):
     # Bad rows are left in ``x``: the box reductions skip them, and the kept
     # rows are zeroed when gathered, so no pass over all N rows copies x.
@@ -182,6 +185,7 @@ def _contact(x, surface, radius, mask, sizes: Sizes, candidates: Candidates | No
     return result._replace(overflow=result.overflow | overflow)
 
 
+@searched_whole(rows="x")
 def _crossing(x_prev, x, surface, mask, sizes: Sizes):
     slave_ok = _inputs.paths_ok(x_prev, x, mask)
     segments = _inputs.resolve_segments(surface)

@@ -19,6 +19,7 @@ from jaxcontact._inputs import Segments
 from jaxcontact._lowest import one_scene_at_a_time
 from jaxcontact._narrow import in_stages, search_all, vmapped
 from jaxcontact._padded import cut_rows, pad_scene
+from jaxcontact._placement import searched_whole
 from jaxcontact._types import Array, Contact, Crossing, Surface
 
 
@@ -84,6 +85,7 @@ def _lowest(kernel, rows, segments: Segments, slave_ok):
 # Compiled as one program even when called outside jit: op by op, the unrolled
 # search took seconds to dispatch on a new shape.
 @jax.jit
+@searched_whole(rows="x")
 def _all_to_all(x, surface, radius, mask):
     x, slave_ok = _inputs.sanitize_points(x, mask)
     segments = _inputs.resolve_segments(surface)
@@ -126,6 +128,7 @@ def swept(x_prev: Array, x: Array, surface: Surface, *, mask: Array | None = Non
 
 
 @jax.jit
+@searched_whole(rows="x")
 def _swept(x_prev, x, surface, mask):
     x_prev, x, slave_ok = _inputs.sanitize_paths(x_prev, x, mask)
     segments = _inputs.resolve_segments(surface)

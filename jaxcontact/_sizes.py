@@ -24,6 +24,7 @@ from jaxcontact import _inputs
 from jaxcontact._broad import Box, broad_phase, conservative_margin, enclosing, segment_boxes
 from jaxcontact._cells import Grid, bin_segments
 from jaxcontact._padded import size_class
+from jaxcontact._placement import searched_whole
 from jaxcontact._types import Array, Surface
 
 # With this many segments or fewer, each kept slave meets every segment: a
@@ -100,6 +101,7 @@ class _Measured(NamedTuple):
 
 
 @functools.partial(jax.jit, static_argnames=("block_size", "num_blocks"))
+@searched_whole(rows="x")
 def _measure(x_prev, x, surface, radius, mask, block_size: int, num_blocks: int) -> _Measured:
     # Jitted: run op by op, this took 5-7 s at every new shape (measured).
     segments = _inputs.resolve_segments(surface)
