@@ -64,7 +64,7 @@ def _on_several_devices(*values) -> bool:
 
 def _on_cpu(*values) -> bool:
     return all(
-        not isinstance(leaf, jax.Array) or leaf.sharding.device_set.pop().platform == "cpu"
+        not isinstance(leaf, jax.Array) or next(iter(leaf.sharding.device_set)).platform == "cpu"
         for leaf in jax.tree.leaves(values)
     )
 
