@@ -58,6 +58,12 @@ SECTIONS = {
     ),
     "stability": Section("Stability", "stability.py", ("--out", "{out}")),
     "simulate": Section("Simulation", "simulate.py"),
+    "long_process": Section(
+        "Long processes: memory maps",
+        "long_process.py",
+        ("--out", "{out}"),
+        "{out}/long_process.md",
+    ),
 }
 VERSIONED = ("jax", "jaxlib", "numpy", "scipy", "shapely", "matplotlib", "jax-md", "libigl")
 

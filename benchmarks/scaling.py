@@ -18,6 +18,13 @@ measured outside the timer (as ``sharded(bucket_sort)`` measures them); and
 those sizes on the host at every call (its "compile s" is its first call;
 timed by 3 calls, as each call currently compiles its ``shard_map`` anew).
 
+Devices, "x sharded on explicit axes" / "on auto axes": the slaves sharded
+with ``jax.sharding`` and passed straight to ``all_to_all`` and the sized
+bucket sort under ``jit``, rows cut to a multiple of 4 (and
+``sharded(all_to_all)`` on the same rows). On explicit axes each program
+gathers them, so every device searches every row; on auto axes the
+compiler partitions the program.
+
 Batches: B cutting scenes (the tool at B positions) under ``jax.vmap`` with
 one ``Sizes`` for the batch (``jaxcontact._sizes.measure_batch``; on the CPU
 the searches inside run scene by scene, the rest batched), against
@@ -42,6 +49,8 @@ def worker(devices: int, num_nodes: int, repeats: int, batches: list[int]) -> No
 
     import jax
     import jax.numpy as jnp
+    from jax.sharding import AxisType, NamedSharding
+    from jax.sharding import PartitionSpec as P
 
     from jaxcontact import Surface, _bucket, all_to_all, bucket_sort, sharded
     from jaxcontact._shard import _device_sizes, _pad_rows, shard_rows
@@ -103,6 +112,27 @@ def worker(devices: int, num_nodes: int, repeats: int, batches: list[int]) -> No
         num_nodes,
         time_call(measured, scene.x, scene.surface, repeats=min(repeats, 3), warmup=0),
     )
+    # The slaves sharded with jax.sharding and passed straight in. Explicit
+    # axes: each program gathers them and searches every row on every device.
+    # Auto axes: the compiler partitions the program as it sees fit.
+    # Rows cut to a multiple of 4, to split evenly over 1, 2 and 4 devices (on
+    # the CPU all_to_all also runs faster on such a count: compare these rows
+    # with each other, not with those above).
+    even = num_rows - num_rows % 4
+    timing = time_call(dense, scene.x[:even], scene.surface, repeats=repeats)
+    emit("devices", "all_to_all, sharded(), rows cut to a multiple of 4", even, timing)
+    detectors = {
+        "all_to_all": jax.jit(functools.partial(all_to_all, radius=radius)),
+        "bucket_sort (sized)": sized_contact(
+            radius, measure(scene.x[:even], scene.surface, radius=radius)
+        ),
+    }
+    for axes in (AxisType.Explicit, AxisType.Auto):
+        typed = jax.make_mesh((devices,), ("slaves",), axis_types=(axes,))
+        split = jax.device_put(scene.x[:even], NamedSharding(typed, P("slaves")))
+        for name, detect in detectors.items():
+            timing = time_call(detect, split, scene.surface, repeats=repeats)
+            emit("devices", f"{name}, x sharded on {axes.name.lower()} axes", even, timing)
     if devices != 1:
         return
 

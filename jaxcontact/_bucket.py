@@ -35,7 +35,9 @@ from jaxcontact._geometry import first_hit_time, squared_distance
 from jaxcontact._inputs import Segments
 from jaxcontact._lowest import one_scene_at_a_time
 from jaxcontact._narrow import Queries, choose, in_stages
-from jaxcontact._sizes import Sizes, measure
+from jaxcontact._padded import cut_rows, pad_scene
+from jaxcontact._placement import searched_whole
+from jaxcontact._sizes import CELLS_ABOVE, Sizes, measure
 from jaxcontact._types import Array, Contact, Crossing, Surface
 from jaxcontact._writeback import empty_contact, empty_crossing, scatter_blocks
 
@@ -54,6 +56,7 @@ class Candidates(NamedTuple):
     overflow: Array  # bool[]  the sizes were too small when they were found
 
 
+@searched_whole(rows="x")
 def find(x, surface: Surface, reach, mask, sizes: Sizes) -> Candidates:
     """``Candidates`` within ``reach`` (the radius plus the skin)."""
     slave_ok = _inputs.rows_ok(x, mask)
@@ -98,7 +101,7 @@ def expired(candidates: Candidates, x, surface: Surface, mask, skin) -> Array:
 
     row_ok = _inputs.rows_ok(x, mask)
     segments = _inputs.resolve_segments(surface)
-    ends_then = candidates.nodes[jnp.clip(segments.indices, 0, candidates.nodes.shape[0] - 1)]
+    ends_then = _inputs.ends_of(candidates.nodes, segments.indices)
     ends_now = jnp.stack([segments.start, segments.end], axis=1)
     end_moves = jnp.max(jnp.sum((ends_now - ends_then) ** 2, axis=-1), axis=-1)
     rows_moved = largest(jnp.sum((x - candidates.reference) ** 2, axis=-1), row_ok)
@@ -156,6 +159,7 @@ def _search_kept(queries: Queries, blocks: Blocks, segments: Segments, boxes, li
     )
 
 
+@searched_whole(rows="x")
 def _contact(x, surface, radius, mask, sizes: Sizes, candidates: Candidates | None = None):
     # Bad rows are left in ``x``: the box reductions skip them, and the kept
     # rows are zeroed when gathered, so no pass over all N rows copies x.
@@ -181,6 +185,7 @@ def _contact(x, surface, radius, mask, sizes: Sizes, candidates: Candidates | No
     return result._replace(overflow=result.overflow | overflow)
 
 
+@searched_whole(rows="x")
 def _crossing(x_prev, x, surface, mask, sizes: Sizes):
     slave_ok = _inputs.paths_ok(x_prev, x, mask)
     segments = _inputs.resolve_segments(surface)
@@ -287,8 +292,10 @@ def bucket_sort(x: Array, surface: Surface, *, radius, mask: Array | None = None
     """
     x, surface, radius, mask = _inputs.check_contact_inputs(x, surface, radius, mask)
     require_concrete("bucket_sort", (x, surface, radius, mask))
-    sizes = measure(x, surface, radius=radius, mask=mask)
-    return contact_jit(x, surface, radius, mask, sizes=sizes)
+    use_cells = surface.segments.shape[0] > CELLS_ABOVE
+    (x,), mask, surface, num_rows = pad_scene((x,), mask, surface)
+    sizes = measure(x, surface, radius=radius, mask=mask, use_cells=use_cells)
+    return cut_rows(contact_jit(x, surface, radius, mask, sizes=sizes), num_rows)
 
 
 def bucket_swept(
@@ -312,5 +319,7 @@ def bucket_swept(
     x_prev, x, mask = _inputs.check_path_inputs(x_prev, x, mask)
     surface = _inputs.check_surface(surface, x_prev.dtype)
     require_concrete("bucket_swept", (x_prev, x, surface, mask))
-    sizes = measure(x, surface, x_prev=x_prev, mask=mask)
-    return crossing_jit(x_prev, x, surface, mask, sizes=sizes)
+    use_cells = surface.segments.shape[0] > CELLS_ABOVE
+    (x_prev, x), mask, surface, num_rows = pad_scene((x_prev, x), mask, surface)
+    sizes = measure(x, surface, x_prev=x_prev, mask=mask, use_cells=use_cells)
+    return cut_rows(crossing_jit(x_prev, x, surface, mask, sizes=sizes), num_rows)

@@ -18,6 +18,8 @@ from jaxcontact._geometry import first_hit_time, squared_distance
 from jaxcontact._inputs import Segments
 from jaxcontact._lowest import one_scene_at_a_time
 from jaxcontact._narrow import in_stages, search_all, vmapped
+from jaxcontact._padded import cut_rows, pad_scene
+from jaxcontact._placement import searched_whole
 from jaxcontact._types import Array, Contact, Crossing, Surface
 
 
@@ -36,8 +38,9 @@ def all_to_all(x: Array, surface: Surface, *, radius, mask: Array | None = None)
       always False. Costs O(N M) time and O(N + M) memory.
 
     Raises:
-      ValueError: on a wrong shape or dtype, and (outside ``jit``) on segment
-        indices out of range or a negative or non-finite radius.
+      ValueError: on a wrong shape or dtype, and (outside ``jit``) on a real
+        segment's index out of range (masked segments' indices may be
+        anything) or a negative or non-finite radius.
 
     Example:
       >>> import jax.numpy as jnp
@@ -48,7 +51,8 @@ def all_to_all(x: Array, surface: Surface, *, radius, mask: Array | None = None)
       ([0.25, -0.125], [False, True], [[0.0, 1.0], [0.0, 1.0]])
     """
     x, surface, radius, mask = _inputs.check_contact_inputs(x, surface, radius, mask)
-    return _all_to_all(x, surface, radius, mask)
+    (x,), mask, surface, num_rows = pad_scene((x,), mask, surface)
+    return cut_rows(_all_to_all(x, surface, radius, mask), num_rows)
 
 
 def _search_all(kernel, rows, segments: Segments, slave_ok, assemble):
@@ -81,6 +85,7 @@ def _lowest(kernel, rows, segments: Segments, slave_ok):
 # Compiled as one program even when called outside jit: op by op, the unrolled
 # search took seconds to dispatch on a new shape.
 @jax.jit
+@searched_whole(rows="x")
 def _all_to_all(x, surface, radius, mask):
     x, slave_ok = _inputs.sanitize_points(x, mask)
     segments = _inputs.resolve_segments(surface)
@@ -118,10 +123,12 @@ def swept(x_prev: Array, x: Array, surface: Surface, *, mask: Array | None = Non
     """
     x_prev, x, mask = _inputs.check_path_inputs(x_prev, x, mask)
     surface = _inputs.check_surface(surface, x.dtype)
-    return _swept(x_prev, x, surface, mask)
+    (x_prev, x), mask, surface, num_rows = pad_scene((x_prev, x), mask, surface)
+    return cut_rows(_swept(x_prev, x, surface, mask), num_rows)
 
 
 @jax.jit
+@searched_whole(rows="x")
 def _swept(x_prev, x, surface, mask):
     x_prev, x, slave_ok = _inputs.sanitize_paths(x_prev, x, mask)
     segments = _inputs.resolve_segments(surface)

@@ -2,11 +2,13 @@
 
 Shapes and dtypes are checked at trace time and raise ``ValueError`` naming
 the argument. Values are checked only where they are concrete (outside
-``jit``): segment indices in range, a radius that is finite and non-negative.
-Under ``jit`` a bad value cannot raise, so it is neutralised instead: a slave
-with a NaN or inf coordinate is treated as masked, a segment touching such a
-node as masked, and both are replaced by zeros before any arithmetic so that
-nothing NaN reaches a value or a gradient.
+``jit``): real segments' indices in range, a radius that is finite and
+non-negative. Masked segments are padding, and their indices are never
+checked (``-1`` is the usual sentinel). Under ``jit`` a bad value cannot
+raise, so it is neutralised instead: a slave with a NaN or inf coordinate is
+treated as masked, a segment touching such a node or with an index out of
+range as masked, and both are replaced by zeros before any arithmetic so
+that nothing NaN reaches a value or a gradient.
 """
 
 from __future__ import annotations
@@ -76,22 +78,53 @@ def check_segments(segments):
     return segments
 
 
+def _check_real_indices(segments, mask, num_nodes: int):
+    """Raises when a real segment's index lies outside ``[0, num_nodes)``.
+
+    Only where the indices and the mask are concrete: with either traced,
+    the real segments are not known here, and an index out of range makes
+    the segment padding instead (``resolve_segments``).
+    """
+    if not (_is_concrete(segments) and _is_concrete(mask)):
+        return
+    values = np.asarray(segments)
+    if mask is not None:
+        values = values[np.asarray(mask)]
+    if not values.size:
+        return
+    low, high = int(values.min()), int(values.max())
+    if low < 0 or high >= num_nodes:
+        real = "" if mask is None else ", where surface.mask is True"
+        raise ValueError(
+            f"surface.segments must index surface.nodes, in [0, {num_nodes - 1}]{real}; "
+            f"got values in [{low}, {high}]"
+        )
+
+
+def _as_int32(segments, num_nodes: int):
+    """``segments`` as int32, every index outside ``[0, num_nodes)`` still outside.
+
+    Narrowing a wider integer wraps (int64 ``2**32`` would become node 0),
+    which would turn an ignored index into a real node: such indices become
+    ``-1`` first, compared in their own dtype.
+    """
+    if np.can_cast(segments.dtype, np.int32):
+        return jnp.asarray(segments, jnp.int32)
+    # NumPy input stays in NumPy: with x64 off, jnp would narrow it first.
+    xp = np if isinstance(segments, np.ndarray) else jnp
+    in_range = (segments >= 0) & (segments < num_nodes)
+    return jnp.asarray(xp.where(in_range, segments.astype(np.int32), -1), jnp.int32)
+
+
 def check_surface(surface: Surface, dtype) -> Surface:
-    """Checks a ``Surface`` against the slaves' ``dtype``."""
+    """Checks a ``Surface`` against the slaves' ``dtype``; segments become int32."""
     if not isinstance(surface, Surface):
         raise ValueError(f"surface must be a jaxcontact.Surface; got {type(surface).__name__}")
     nodes = check_points("surface.nodes", surface.nodes, dtype)
     segments = check_segments(surface.segments)
-    if _is_concrete(segments) and segments.size:
-        values = np.asarray(segments)
-        low, high = int(values.min()), int(values.max())
-        if low < 0 or high >= nodes.shape[0]:
-            raise ValueError(
-                f"surface.segments must index surface.nodes, in [0, {nodes.shape[0] - 1}]; "
-                f"got values in [{low}, {high}]"
-            )
     mask = check_mask("surface.mask", surface.mask, segments.shape[0])
-    return Surface(nodes, jnp.asarray(segments, jnp.int32), mask)
+    _check_real_indices(segments, mask, nodes.shape[0])
+    return Surface(nodes, _as_int32(segments, nodes.shape[0]), mask)
 
 
 def check_radius(radius, dtype) -> Array:
@@ -127,13 +160,25 @@ class Segments:
     num_nodes: int  # P, static: ok segments' node indices lie in [0, P)
 
 
+def ends_of(nodes: Array, indices: Array) -> Array:
+    """f[M, 2, 2]: the nodes at ``indices`` (i32[M, 2]), read clamped into range.
+
+    An index out of range reads some node (zeros when there are no nodes,
+    where a gather cannot run at all): the caller masks those segments.
+    """
+    if nodes.shape[0] == 0:
+        return jnp.zeros(indices.shape + (2,), nodes.dtype)
+    return nodes[jnp.clip(indices, 0, nodes.shape[0] - 1)]
+
+
 def resolve_segments(surface: Surface) -> Segments:
     """End points of every segment; masked, non-finite or zero-length ones flagged."""
-    start = surface.nodes[surface.segments[:, 0]]
-    end = surface.nodes[surface.segments[:, 1]]
+    ends = ends_of(surface.nodes, surface.segments)
+    start, end = ends[:, 0], ends[:, 1]
     num_nodes = surface.nodes.shape[0]
-    # Indices out of range (possible only under jit, where they cannot be
-    # checked) would be clamped by the gather: such segments are not real.
+    # Masked segments' indices may be anything (a sentinel such as -1), and
+    # under jit even a real segment's cannot be checked: a segment with an
+    # index out of range reads a node it does not name, and is not real.
     in_range = jnp.all((surface.segments >= 0) & (surface.segments < num_nodes), axis=-1)
     finite = jnp.all(jnp.isfinite(start) & jnp.isfinite(end), axis=-1) & in_range
     ok = finite if surface.mask is None else finite & surface.mask

@@ -22,6 +22,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxcontact import _bucket, _dense, _inputs
+from jaxcontact._placement import replicated, searched_whole
 from jaxcontact._sizes import CELLS_ABOVE, CHUNK_ROWS, Sizes, largest, measure, measure_batch
 from jaxcontact._types import Array, Contact, Crossing, Surface
 
@@ -211,7 +212,8 @@ class Search:
         return self._state(sizes, path_sizes, candidates, overflow, ())
 
     def _allocate_batch(self, x, surface, x_prev, mask, at_least) -> SearchState:
-        x = jnp.asarray(x)
+        # A batch split over explicit mesh axes cannot be mapped over: whole.
+        x, surface, x_prev, mask = replicated((jnp.asarray(x), surface, x_prev, mask))
         if x.shape[-1] != 2:
             raise ValueError(f"x must have shape (N, 2) or (B, N, 2); got shape {x.shape}")
         # A mask, or a surface's segments and mask, may be shared by the batch.
@@ -412,6 +414,7 @@ def _check_unbatched(state: SearchState, method: str):
 
 
 @functools.partial(jax.jit, static_argnums=0)
+@searched_whole(rows="x")
 def _closest(search: Search, state: SearchState, x, surface, mask):
     sizes = state.sizes
     reach = jnp.asarray(search._reach, x.dtype)

@@ -9,6 +9,11 @@ its own rows, so the only communication is the ``psum`` that ORs
 ``overflow``; reductions onto the tool (``contact_forces(...,
 axis_name=...)``) are one more ``psum``. The same code runs on one host or
 many (``jax.distributed.initialize`` first; see the README).
+
+Arrays already sharded with ``jax.sharding`` may also be passed to the
+detectors as they are (``_placement``): each program gathers them and
+searches every row on every device, which is simpler but does not split the
+work.
 """
 
 from __future__ import annotations

@@ -23,6 +23,8 @@ import numpy as np
 from jaxcontact import _inputs
 from jaxcontact._broad import Box, broad_phase, conservative_margin, enclosing, segment_boxes
 from jaxcontact._cells import Grid, bin_segments
+from jaxcontact._padded import size_class
+from jaxcontact._placement import searched_whole
 from jaxcontact._types import Array, Surface
 
 # With this many segments or fewer, each kept slave meets every segment: a
@@ -71,7 +73,17 @@ class Sizes:
 
 
 def _grow(count: float, slack: float, least: int = 1) -> int:
-    return max(least, int(math.ceil(count * slack)))
+    """``count * slack`` rounded up to its size class (at most 1/4 more).
+
+    Sizes are static, so each distinct value compiles a program of its own:
+    rounded to classes, configurations that differ a little share one.
+    """
+    return size_class(max(least, int(math.ceil(count * slack))))
+
+
+def _edge_class(edge: float) -> float:
+    """``edge`` rounded up to a power of 2**(1/4): as ``_grow``, for the cell edge."""
+    return 2.0 ** (math.ceil(4 * math.log2(edge)) / 4)
 
 
 class _Measured(NamedTuple):
@@ -89,6 +101,7 @@ class _Measured(NamedTuple):
 
 
 @functools.partial(jax.jit, static_argnames=("block_size", "num_blocks"))
+@searched_whole(rows="x")
 def _measure(x_prev, x, surface, radius, mask, block_size: int, num_blocks: int) -> _Measured:
     # Jitted: run op by op, this took 5-7 s at every new shape (measured).
     segments = _inputs.resolve_segments(surface)
@@ -213,9 +226,10 @@ def measure(
         most_cells = max(64, 4 * len(points))
         while np.prod(np.ceil(extent * slack / cell_size) + 1) > most_cells:
             cell_size *= 1.25
-    grid_shape = tuple(int(v) for v in np.ceil(extent * slack / cell_size).astype(int) + 1)
+        cell_size = _edge_class(cell_size)
+    grid_shape = tuple(size_class(int(v)) for v in np.ceil(extent * slack / cell_size) + 1)
     widths = (np.asarray(measured.boxes.high) - np.asarray(measured.boxes.low))[ok]
-    span = tuple(int(math.ceil(w * slack / cell_size)) + 1 for w in widths.max(axis=0))
+    span = tuple(size_class(int(math.ceil(w * slack / cell_size)) + 1) for w in widths.max(axis=0))
     grid = Grid(jnp.asarray(low, x.dtype), jnp.asarray(cell_size, x.dtype))
     most_per_cell = int(_fullest_cell(measured.boxes, measured.segment_ok, grid, grid_shape, span))
     return Sizes(

@@ -20,7 +20,9 @@ class Surface(NamedTuple):
 
     Segment ``k`` runs from ``nodes[segments[k, 0]]`` to ``nodes[segments[k, 1]]``;
     its outward normal is the tangent turned clockwise, so an outline listed
-    counter-clockwise has normals pointing out of it.
+    counter-clockwise has normals pointing out of it. A masked segment is
+    padding: its indices may be anything (``-1``, say), as may the nodes
+    only masked segments use.
     """
 
     nodes: Array  # f[P, 2]  master node coordinates

@@ -41,10 +41,10 @@ def validate(x, surface: Surface, *, radius=None, mask=None, x_prev=None) -> Non
     Everything the detectors check at trace time (shapes, dtypes) is checked,
     and also the values they would silently neutralise under ``jit``:
     non-finite coordinates in real (unmasked) slave rows, of ``x`` and of
-    ``x_prev``; non-finite nodes used by real segments; segment indices that
-    are negative or not below the node count; a negative or non-finite
-    radius. Masked rows and masked segments are not looked at: they may hold
-    anything.
+    ``x_prev``; non-finite nodes used by real segments; real segments'
+    indices that are negative or not below the node count; a negative or
+    non-finite radius. Masked rows and masked segments are not looked at:
+    they may hold anything (a masked segment's indices ``-1``, say).
 
     A real segment of zero length is legal (the detectors ignore it, as if
     masked), but it is usually a meshing slip: it gives a ``UserWarning``
@@ -85,14 +85,13 @@ def validate(x, surface: Surface, *, radius=None, mask=None, x_prev=None) -> Non
         raise ValueError(f"surface must be a jaxcontact.Surface; got {type(surface).__name__}")
     nodes = np.asarray(_inputs.check_points("surface.nodes", surface.nodes, x.dtype))
     segments = np.asarray(_inputs.check_segments(surface.segments))
-    # Every row, masked ones too: the detectors raise on them outside jit.
-    outside = np.any((segments < 0) | (segments >= len(nodes)), axis=-1)
+    seg_mask = _inputs.check_mask("surface.mask", surface.mask, segments.shape[0])
+    real_segments = np.ones(len(segments), bool) if seg_mask is None else np.asarray(seg_mask)
+    outside = real_segments & np.any((segments < 0) | (segments >= len(nodes)), axis=-1)
     if outside.any():
         raise ValueError(
             f"surface.segments has indices outside [0, {len(nodes) - 1}] in {_rows(outside)}"
         )
-    seg_mask = _inputs.check_mask("surface.mask", surface.mask, segments.shape[0])
-    real_segments = np.ones(len(segments), bool) if seg_mask is None else np.asarray(seg_mask)
     if radius is not None:
         _inputs.check_radius(radius, x.dtype)
     real = np.ones(x.shape[0], bool) if mask is None else np.asarray(mask)
@@ -104,7 +103,9 @@ def validate(x, surface: Surface, *, radius=None, mask=None, x_prev=None) -> Non
         bad = real & ~np.all(np.isfinite(points), axis=-1)
         if bad.any():
             raise ValueError(f"{name} has non-finite coordinates in real {_rows(bad)}")
-    ends = nodes[segments]
+    # Masked segments' indices may lie anywhere: only real ones are read.
+    ends = np.zeros(segments.shape + (2,), nodes.dtype)
+    ends[real_segments] = nodes[segments[real_segments]]
     bad_ends = real_segments & ~np.all(np.isfinite(ends), axis=(-1, -2))
     if bad_ends.any():
         raise ValueError(

@@ -1,0 +1,152 @@
+"""Plain calls run at a few padded shapes, so a long process compiles few programs.
+
+Every XLA program the CPU backend compiles maps about three memory regions
+per kernel into the process (code, read-only data, data), and a detector's
+program has 40-200 kernels: 150-600 maps per program, freed only by
+``jax.clear_caches()``. A process that calls a detector at hundreds of
+shapes (a sweep over mesh sizes, a notebook, a test suite) reaches the
+kernel's ``vm.max_map_count`` (65,530 by default) and XLA's compiler
+crashes (measured: benchmarks/long_process.py).
+
+So the one-call detectors, called plainly on concrete arrays, pad the
+slaves, the segments and the master nodes up to a size class (``size_class``:
+four classes per doubling, at most 1/4 more rows) with masked padding, run
+the program compiled for that class, and cut the rows back. Real rows are
+unchanged: padding never changes a real row (docs/contract.md). Under
+``jit``, ``vmap`` or ``grad`` the caller's program is compiled once at the
+caller's shapes anyway, and nothing is padded.
+"""
+
+from __future__ import annotations
+
+import functools
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxcontact._types import Surface
+
+# Scenes at least this small share one padded shape: their programs cost
+# the same to run, and tests and notebooks make many of them.
+SMALLEST_ROWS = 16
+SMALLEST_SEGMENTS = 8
+
+
+def size_class(count: int, smallest: int = 1) -> int:
+    """The least ``m * 2**e >= count`` with ``m`` in [4, 8): at most 1/4 above.
+
+    Four classes per doubling: a sweep over 200 to 20,000 rows meets 27.
+    Counts up to 8 are their own class, below ``smallest`` it is ``smallest``,
+    and ``0`` stays ``0`` (the empty scene).
+
+    Example:
+      >>> [size_class(n) for n in (0, 5, 16, 17, 100, 1000, 81_939)]
+      [0, 5, 16, 20, 112, 1024, 98304]
+    """
+    if count <= 0:
+        return 0
+    count = max(count, smallest)
+    shift = max(0, count.bit_length() - 3)
+    return -(-count // (1 << shift)) << shift
+
+
+def _traced(*values) -> bool:
+    return any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree.leaves(values))
+
+
+def _on_several_devices(*values) -> bool:
+    return any(
+        isinstance(leaf, jax.Array) and len(leaf.sharding.device_set) > 1
+        for leaf in jax.tree.leaves(values)
+    )
+
+
+def _on_cpu(*values) -> bool:
+    return all(
+        not isinstance(leaf, jax.Array) or next(iter(leaf.sharding.device_set)).platform == "cpu"
+        for leaf in jax.tree.leaves(values)
+    )
+
+
+def _pad(values, length: int, fill, module=jnp):
+    """``values`` with rows of ``fill`` appended up to ``length`` rows."""
+    if values is None:
+        return None
+    # Always ``module``'s arrays: jit caches NumPy and device arguments apart.
+    values = module.asarray(values)
+    pad = [(0, length - values.shape[0])] + [(0, 0)] * (values.ndim - 1)
+    return module.pad(values, pad, constant_values=fill)
+
+
+def _row_mask(mask, num_rows: int, length: int, module):
+    """bool[length]: ``mask`` (or all True) for the real rows, False for padding."""
+    if mask is None:
+        mask = np.ones((num_rows,), bool)
+    return _pad(mask, length, False, module)
+
+
+def _pad_arrays(slaves, mask, surface: Surface, rows: int, segments: int, nodes: int, module):
+    num_rows, num_segments = slaves[0].shape[0], surface.segments.shape[0]
+    slaves = tuple(_pad(values, rows, 0, module) for values in slaves)
+    mask = _row_mask(mask, num_rows, rows, module)
+    segment_mask = _row_mask(surface.mask, num_segments, segments, module)
+    nodes, segments = (
+        _pad(surface.nodes, nodes, 0, module),
+        _pad(surface.segments, segments, 0, module),
+    )
+    return slaves, mask, Surface(nodes, segments, segment_mask)
+
+
+# Arrays on an accelerator are padded there, in one small program (op by op,
+# each pad would be a program of its own).
+_pad_on_device = jax.jit(
+    functools.partial(_pad_arrays, module=jnp), static_argnames=("rows", "segments", "nodes")
+)
+
+
+def pad_scene(slaves: tuple, mask, surface: Surface):
+    """``(slaves, mask, surface, num_rows)`` padded to their size classes.
+
+    ``slaves`` are the checked f[N, 2] arrays of one query (``(x,)`` or
+    ``(x_prev, x)``). Returns them unchanged, with ``num_rows = None``, when
+    padding would not help: traced inputs, arrays spread over several devices,
+    empty scenes.
+    """
+    num_rows, num_segments = slaves[0].shape[0], surface.segments.shape[0]
+    num_nodes = surface.nodes.shape[0]
+    rows = size_class(num_rows, SMALLEST_ROWS)
+    segments = size_class(num_segments, SMALLEST_SEGMENTS)
+    nodes = size_class(num_nodes, SMALLEST_SEGMENTS)
+    # Scenes already at their class are passed the same way (with a row
+    # mask), so that they share its program too.
+    if (
+        num_rows == 0
+        or num_segments == 0
+        or _traced(slaves, mask, surface)
+        or _on_several_devices(slaves, mask, surface)
+    ):
+        return slaves, mask, surface, None
+    # On the CPU, NumPy pads without compiling anything.
+    on_cpu = _on_cpu(slaves, mask, surface)
+    pad = functools.partial(_pad_arrays, module=np) if on_cpu else _pad_on_device
+    slaves, mask, surface = pad(slaves, mask, surface, rows=rows, segments=segments, nodes=nodes)
+    return slaves, mask, surface, num_rows
+
+
+@functools.partial(jax.jit, static_argnames="num_rows")
+def _first_rows(result, num_rows: int):
+    return jax.tree.map(lambda values: values[:num_rows] if values.ndim else values, result)
+
+
+def cut_rows(result, num_rows: int | None):
+    """``result`` with its per-row fields cut back to ``num_rows`` rows."""
+    if num_rows is None:
+        return result
+    if not _on_cpu(result):
+        return _first_rows(result, num_rows=num_rows)
+    # On the CPU a host view, cut and put back, compiles nothing.
+    return jax.tree.map(
+        lambda values: jax.device_put(np.asarray(values)[:num_rows] if values.ndim else values),
+        result,
+    )

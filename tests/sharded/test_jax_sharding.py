@@ -1,0 +1,242 @@
+"""Arrays sharded with ``jax.sharding``, passed straight to every detector and to ``Search``.
+
+Run on 4 CPU devices by ``tests/test_shard.py``. Each case shards the slaves
+(and the surface) one way, on explicit or auto mesh axes, calls half of the
+detectors plainly or under one ``jax.jit``, and compares each result with the
+single-device one: integer and bool fields exactly, floats to rounding.
+Compiling for 4 devices costs about a second a program on 2 cores, so the
+cases cover each setting once or twice rather than all their products.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import inspect
+import re
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from jax.sharding import AxisType, NamedSharding
+from jax.sharding import PartitionSpec as P
+
+from jaxcontact import Search, Surface, _dense, all_to_all, bucket_sort, bucket_swept, swept
+from tests.helpers import local_atol
+
+RADIUS = 0.25
+SKIN = 0.1
+
+
+def _scene(num_slaves: int, dtype):
+    """Slaves around an octagon (8 nodes, 8 segments, one masked); paths
+    that cross it. Counts divisible by 4 on the master, so it can be split."""
+    angles = np.linspace(0, 2 * np.pi, 8, endpoint=False)
+    nodes = np.stack([np.cos(angles), np.sin(angles)], axis=1)
+    segments = np.stack([np.arange(8), (np.arange(8) + 1) % 8], axis=1).astype(np.int32)
+    segment_mask = np.arange(8) != 5
+    rng = np.random.default_rng(num_slaves)
+    theta = rng.uniform(0, 2 * np.pi, num_slaves)
+    r = rng.uniform(0.7, 1.2, num_slaves)
+    r_prev = np.where(np.arange(num_slaves) % 2 == 0, 2 - r, r + 0.05)
+    ring = np.stack([np.cos(theta), np.sin(theta)], axis=1)
+    x, x_prev = r[:, None] * ring, r_prev[:, None] * ring
+    mask = np.arange(num_slaves) != 3
+    surface = Surface(nodes.astype(dtype), segments, segment_mask)
+    return x_prev.astype(dtype), x.astype(dtype), surface, mask
+
+
+class Case(NamedTuple):
+    dtype: type
+    num_slaves: int
+    axis_type: AxisType
+    mesh_shape: dict  # axis name -> size
+    rows: P  # the slaves' spec (x, x_prev; the mask takes its first entry)
+    master: P | None  # the spec of the surface's nodes, segments and mask; None: replicated
+    jit: bool
+    groups: tuple[str, ...]  # which detectors run: DENSE_AND_BINNED or BUCKET_AND_SKIN
+    set_mesh: bool = False
+
+
+# Each group of detectors runs in two cases that differ in every setting
+# (dtype, N divisible by 4 or not, explicit or auto axes, plain or jit),
+# rather than in all 16 combinations: each case compiles its own programs.
+EXPLICIT, AUTO = AxisType.Explicit, AxisType.Auto
+LINE, SQUARE = {"d": 4}, {"a": 2, "b": 2}
+DENSE_AND_BINNED = ("all_to_all", "swept", "Search binned")
+BUCKET_AND_SKIN = ("bucket_sort", "bucket_swept", "Search with a skin")
+CASES = {
+    "explicit-f32-12-rows-jit-set_mesh": Case(
+        np.float32, 12, EXPLICIT, LINE, P("d"), None, True, DENSE_AND_BINNED, set_mesh=True
+    ),
+    "auto-f64-13-columns-master-plain": Case(
+        np.float64, 13, AUTO, SQUARE, P(None, "a"), P(("a", "b")), False, DENSE_AND_BINNED
+    ),
+    "explicit-f64-13-columns-master-plain": Case(
+        np.float64, 13, EXPLICIT, SQUARE, P(None, "b"), P(("a", "b")), False, BUCKET_AND_SKIN
+    ),
+    "auto-f32-12-second-axis-jit": Case(
+        np.float32, 12, AUTO, SQUARE, P("b"), None, True, BUCKET_AND_SKIN
+    ),
+}  # fmt: skip
+
+
+def _mesh(case: Case):
+    names = tuple(case.mesh_shape)
+    return jax.make_mesh(
+        tuple(case.mesh_shape.values()), names, axis_types=(case.axis_type,) * len(names)
+    )
+
+
+def _put(mesh, value, spec: P):
+    return jax.device_put(jnp.asarray(value), NamedSharding(mesh, spec))
+
+
+def _rebuilt_mask(mask):
+    """Row 5 masked when the search with a skin is allocated: real at its first
+    step, so that step finds the candidates again inside the jitted search."""
+    return mask & (jnp.arange(mask.shape[0]) != 5)
+
+
+def _detect(groups, x_prev, x, surface, mask, *, jit: bool) -> dict:
+    """The detectors of ``groups`` on the same inputs: a dict of results."""
+    binned = Search(radius=RADIUS, method="binned")
+    skin = Search(radius=RADIUS, skin=SKIN, method="dense")
+    # Host: sizes measured from the data.
+    found, states = {}, {}
+    if "bucket_sort" in groups:
+        found["bucket_sort"] = bucket_sort(x, surface, radius=RADIUS, mask=mask)
+        found["bucket_swept"] = bucket_swept(x_prev, x, surface, mask=mask)
+    if "Search binned" in groups:
+        states["binned"] = binned.allocate(x, surface, x_prev=x_prev, mask=mask)
+    if "Search with a skin" in groups:
+        states["skin"] = skin.allocate(x, surface, mask=_rebuilt_mask(mask))
+
+    def traced(x_prev, x, surface, mask, states):
+        out = {}
+        if "all_to_all" in groups:
+            out["all_to_all"] = all_to_all(x, surface, radius=RADIUS, mask=mask)
+            out["swept"] = swept(x_prev, x, surface, mask=mask)
+            out["gradient"] = jax.grad(_energy)(x, surface, mask)
+        if "binned" in states:
+            state = states["binned"]
+            out["binned closest"], _ = binned.closest(state, x, surface, mask=mask)
+            out["binned swept"], _ = binned.swept(state, x_prev, x, surface, mask=mask)
+        if "skin" in states:
+            state = states["skin"]
+            out["skin closest, found again"], state = skin.closest(state, x, surface, mask=mask)
+            out["skin closest, reused"], state = skin.closest(state, x, surface, mask=mask)
+            out["rebuilds"] = state.rebuilds
+            started = skin.init(x, surface, sizes=state.sizes, mask=mask)
+            out["skin closest after init"], _ = skin.closest(started, x, surface, mask=mask)
+        return out
+
+    found |= (jax.jit(traced) if jit else traced)(x_prev, x, surface, mask, states)
+    if "rebuilds" in found:
+        assert int(found.pop("rebuilds")) == 1
+    return found
+
+
+def _energy(x, surface, mask):
+    contact = all_to_all(x, surface, radius=RADIUS, mask=mask)
+    return jnp.sum(jnp.where(contact.active, contact.gap**2, 0))
+
+
+def _assert_same(name, got, want):
+    assert type(got) is type(want), name
+    for field, value in zip(want._fields, want, strict=True):
+        actual, expected = np.asarray(getattr(got, field)), np.asarray(value)
+        assert actual.dtype == expected.dtype, (name, field)
+        if expected.dtype.kind == "f":
+            atol = local_atol(expected.dtype, scale=4.0)
+            np.testing.assert_allclose(actual, expected, rtol=0, atol=atol, err_msg=(name, field))
+        else:
+            np.testing.assert_array_equal(actual, expected, err_msg=f"{name}: {field}")
+
+
+_ONE_DEVICE = {}
+
+
+def _one_device(dtype, num_slaves: int):
+    """The single-device results: ``all_to_all`` and ``swept`` (which the bucket
+    detectors and ``Search`` equal without overflow), computed once."""
+    key = (np.dtype(dtype), num_slaves)
+    if key not in _ONE_DEVICE:
+        x_prev, x, surface, mask = _scene(num_slaves, dtype)
+        contact = all_to_all(x, surface, radius=RADIUS, mask=mask)
+        crossing = swept(x_prev, x, surface, mask=mask)
+        assert int(contact.active.sum()) > 0 and int(crossing.crossed.sum()) > 0
+        _ONE_DEVICE[key] = contact, crossing, jax.grad(_energy)(x, surface, mask)
+    return _ONE_DEVICE[key]
+
+
+@pytest.mark.parametrize("case", CASES.values(), ids=CASES.keys())
+def test_sharded_arrays_give_the_single_device_answer(case: Case):
+    mesh = _mesh(case)
+    x_prev, x, surface, mask = _scene(case.num_slaves, case.dtype)
+    contact, crossing, gradient = _one_device(case.dtype, case.num_slaves)
+    with jax.set_mesh(mesh) if case.set_mesh else contextlib.nullcontext():
+        x_prev, x = _put(mesh, x_prev, case.rows), _put(mesh, x, case.rows)
+        mask = _put(mesh, mask, P(case.rows[0]))
+        if case.master is not None:
+            surface = Surface(*(_put(mesh, leaf, P(case.master[0])) for leaf in surface))
+        found = _detect(case.groups, x_prev, x, surface, mask, jit=case.jit)
+    if "gradient" in found:
+        atol = local_atol(case.dtype, scale=4.0)
+        np.testing.assert_allclose(found.pop("gradient"), gradient, rtol=0, atol=atol)
+    assert not any(bool(result.overflow) for result in found.values())
+    for name, result in found.items():
+        _assert_same(name, result, crossing if "swept" in name else contact)
+    if case.axis_type is AUTO:
+        return  # the compiler places the results
+    rows = NamedSharding(mesh, P(case.rows[0]))
+    for name, result in found.items():
+        for field in result._fields:
+            value = getattr(result, field)
+            want = NamedSharding(mesh, P()) if value.ndim == 0 else rows
+            assert value.sharding.is_equivalent_to(want, value.ndim), (name, field, value.sharding)
+
+
+@pytest.mark.parametrize("axis_type", [EXPLICIT, AUTO], ids=["explicit", "auto"])
+def test_a_batch_split_over_its_scenes(axis_type):
+    # Four scenes (the slaves turned about the octagon), split one per device.
+    mesh = jax.make_mesh((4,), ("d",), axis_types=(axis_type,))
+    _, x, surface, mask = _scene(12, np.float32)
+    turns = [np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]]) for a in range(4)]
+    xs = np.stack([x @ turn.astype(np.float32) for turn in turns])
+    want = jax.vmap(lambda x: all_to_all(x, surface, radius=RADIUS, mask=mask))(xs)
+    split = _put(mesh, xs, P("d"))
+    search = Search(radius=RADIUS)
+    state = search.allocate(split, surface, mask=mask)
+    if axis_type is EXPLICIT:
+        # vmap maps no axis split over explicit mesh axes beside the
+        # (replicated) state: the batch is gathered for the step.
+        split = jax.reshard(split, NamedSharding(mesh, P()))
+    step = jax.jit(jax.vmap(lambda state, x: search.closest(state, x, surface, mask=mask)))
+    got, _ = step(state, split)
+    _assert_same("vmapped closest", got, want)
+
+
+def _printed(jaxpr) -> str:
+    # Some JAX versions print the address of a closed-over function.
+    return re.sub(r"0x[0-9a-f]+", "0x", str(jaxpr))
+
+
+def test_inputs_not_split_over_explicit_axes_trace_to_the_same_program():
+    # One device, replicated on explicit axes, split on auto axes: the
+    # programs gather nothing, so they are what they were without it.
+    _, x, surface, _ = _scene(12, np.float32)
+    radius = jnp.asarray(RADIUS, np.float32)
+    unwrapped = jax.jit(inspect.unwrap(_dense._all_to_all))
+    for name, x_in in {
+        "one device": x,
+        "explicit, replicated": _put(jax.make_mesh((4,), ("d",)), x, P()),
+        "auto, split": _put(jax.make_mesh((4,), ("d",), axis_types=(AUTO,)), x, P("d")),
+    }.items():
+        got = jax.make_jaxpr(_dense._all_to_all)(x_in, surface, radius, None)
+        want = jax.make_jaxpr(unwrapped)(x_in, surface, radius, None)
+        assert _printed(got) == _printed(want), name
+    split = _put(jax.make_mesh((4,), ("d",)), x, P("d"))
+    got = jax.make_jaxpr(_dense._all_to_all)(split, surface, radius, None)
+    assert "reshard" in str(got)
