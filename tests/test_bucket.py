@@ -84,10 +84,12 @@ SCENES = {
 # one-call form), and the small-tool scenes once more with cells forced on
 # (sized). Each case compiles its own programs (the sizes come from the
 # data), so the dtypes alternate over the scenes: the tool in the workpiece
-# and the rough die (cells) in both, the other scenes in one each. The two
-# float32 one-call cases, without and with cells, run with x64 off too.
+# and the rough die (cells) in both, the other scenes in one each. The
+# float32 rough die (cells) runs with x64 off too; without cells, the one-call
+# forms run with x64 off in test_masks_nan_padding_and_empty_inputs and
+# test_bucket_swept_ignores_a_nan_previous_position_like_swept.
 CASES = [
-    pytest.param("cutting_contact", jnp.float32, None, marks=X64_OFF),
+    ("cutting_contact", jnp.float32, None),
     ("cutting_contact", jnp.float64, None),
     ("cutting_deep", jnp.float64, None),
     ("cutting_clear", jnp.float32, None),

@@ -98,7 +98,6 @@ def test_closest_in_a_scan_under_jit_equals_all_to_all_at_every_step():
         assert_same_contact(*step, RADIUS)
 
 
-@pytest.mark.x64_off
 def test_swept_equals_swept_at_every_step_and_outgrown_sizes_say_so():
     xs, nodes, segments = trajectory(jnp.float32, x_tip=20.05, tool_step=0.05)
     # Paths as the tool sees them: each node comes from a tool step behind.

@@ -33,7 +33,7 @@ from jaxcontact import (
 )
 from jaxcontact._bucket import Candidates
 from jaxcontact._sizes import measure
-from tests.helpers import local_atol
+from tests.helpers import FLOAT, local_atol
 
 RADIUS = 0.25
 # A floor listed right to left (normals up) with two corners, and node 4,
@@ -63,7 +63,7 @@ def padded_rows(sentinel: int, where: str, real=REAL):
     return np.array(rows), mask, np.array([0] + list(range(2, len(real) + 1)))
 
 
-def padded(sentinel: int, where: str, dtype=np.float64):
+def padded(sentinel: int, where: str, dtype=FLOAT):
     """The floor with one masked padding segment; and where the real ones went."""
     segments, mask, moved = padded_rows(sentinel, where)
     surface = Surface(
@@ -72,7 +72,7 @@ def padded(sentinel: int, where: str, dtype=np.float64):
     return surface, moved
 
 
-def unpadded(dtype=np.float64) -> Surface:
+def unpadded(dtype=FLOAT) -> Surface:
     return Surface(jnp.asarray(NODES, dtype), jnp.asarray(REAL))
 
 
@@ -82,7 +82,7 @@ def renumbered(segment, moved):
     return np.where(segment >= 0, moved[np.maximum(segment, 0)], -1)
 
 
-def assert_same_rows(got, want, moved, dtype=np.float64):
+def assert_same_rows(got, want, moved, dtype=FLOAT):
     """Every field of ``got`` (padded) is ``want``'s (unpadded), and finite."""
     for field, value in zip(got._fields, got, strict=True):
         value, expected = np.asarray(value), np.asarray(getattr(want, field))
@@ -140,7 +140,7 @@ def detect(name: str, transform: str, surface: Surface, x_prev=X_PREV, x=X):
 
 
 @functools.cache
-def reference(name: str, dtype=np.float64):
+def reference(name: str, dtype=FLOAT):
     """The exhaustive detector's result on the scene without padding: every
     detector returns what it returns (one compilation serves them all)."""
     x_prev, x, surface = X_PREV.astype(dtype), X.astype(dtype), unpadded(dtype)
@@ -225,7 +225,7 @@ def test_gradients_are_finite_and_unchanged_by_the_padding(name, sentinel, where
     got, want = _gradient(name, surface), reference_gradient(name)
     for value, expected, argument in zip(got, want, ("x", "nodes"), strict=True):
         assert np.isfinite(np.asarray(value)).all(), argument
-        np.testing.assert_allclose(value, expected, rtol=0, atol=local_atol(np.float64))
+        np.testing.assert_allclose(value, expected, rtol=0, atol=local_atol(FLOAT))
     # The padding reads node 4 (or node 0); node 4 gets no gradient from it.
     assert not np.asarray(got[1])[4].any()
 
@@ -396,6 +396,7 @@ def test_without_a_mask_every_segment_is_real():
         all_to_all(X, surface, radius=RADIUS)
 
 
+@pytest.mark.x64
 @pytest.mark.parametrize("sentinel", [-1, 2**31 - 1, 2**40])
 def test_int64_and_list_segments(sentinel):
     # Tests run with x64: int64 stays int64 until the detectors narrow it.
@@ -411,6 +412,7 @@ def test_int64_and_list_segments(sentinel):
     validate(X, listed)
 
 
+@pytest.mark.x64
 def test_a_real_int64_index_past_int32_is_not_wrapped_onto_a_node():
     # 2**32 + 1 narrowed to int32 would be node 1: a made-up segment 1 -> 3
     # running just under the slaves. Plainly it raises; under jit the

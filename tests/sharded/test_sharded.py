@@ -105,6 +105,7 @@ def test_overflow_on_one_device_is_overflow_of_the_whole(mesh):
     assert bool(result.overflow)
 
 
+@pytest.mark.x64
 def test_tool_force_is_a_collective_sum_equal_to_one_device(mesh):
     scene = _scene(1_100, jnp.float64)
     one = contact_forces(all_to_all(scene.x, scene.surface, radius=RADIUS), 1e3)[1]
@@ -132,6 +133,7 @@ def test_tool_force_is_a_collective_sum_equal_to_one_device(mesh):
     np.testing.assert_allclose(total, one, rtol=1e-12)
 
 
+@pytest.mark.x64
 def test_gradients_through_the_sharded_detector_equal_one_device(mesh):
     scene = _scene(1_100, jnp.float64)
 
