@@ -39,6 +39,7 @@ def compiled(fn, args, row_multiple: int):
     """``jax.jit(fn)`` compiled for ``args`` with ``_dense.ROW_MULTIPLE`` set while tracing."""
     kept = _dense.ROW_MULTIPLE
     _dense.ROW_MULTIPLE = row_multiple
+    jax.clear_caches()  # the dense program traced anew, not taken from the cache
     try:
         return jax.jit(fn).lower(*args).compile()
     finally:

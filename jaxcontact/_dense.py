@@ -82,10 +82,12 @@ def _lowest(kernel, rows, segments: Segments, slave_ok):
     return in_stages(jnp.any(slave_ok), [search], [jnp.full(slave_ok.shape, -1, jnp.int32)])
 
 
-# The dense search's rows come in whole vectors: XLA's CPU fusion emitters
-# (its default code generator) ran it 3x (all_to_all) to 9x (swept) slower on
-# 81,939 rows than on 81,936 or 81,928 (python benchmarks/row_counts.py).
-# Masked rows of zeros fill the last vector; a real row never sees them.
+# The swept search's rows come in whole vectors: with XLA's CPU fusion
+# emitters (its default code generator) it ran 3x slower on 81,937 or 81,939
+# rows than on 81,944 (python benchmarks/row_counts.py). Masked rows of zeros
+# fill the last vector; a real row never sees them. all_to_all is slower on
+# such counts too (2.5x, 81,939 against 81,936 rows), but padding it the same
+# way did not help: the cause is elsewhere, not found yet.
 ROW_MULTIPLE = 8
 
 
@@ -96,11 +98,14 @@ def _whole_vectors(rows: tuple, mask):
     if extra == 0:
         return rows, mask
     ok = jnp.ones(rows[0].shape[0], bool) if mask is None else mask
-    return tuple(jnp.pad(r, ((0, extra), (0, 0))) for r in rows), jnp.pad(ok, (0, extra))
+    padded = tuple(jnp.pad(r, ((0, extra), (0, 0))) for r in rows), jnp.pad(ok, (0, extra))
+    # Written out once: a pad fused into the search's loops would keep the odd count.
+    return jax.lax.optimization_barrier(padded)
 
 
 def _first_rows(result, num_rows: int):
     """``result`` (a ``Contact`` or ``Crossing``) cut back to its first ``num_rows`` rows."""
+    result = jax.lax.optimization_barrier(result)  # the search writes whole vectors too
     return jax.tree.map(lambda field: field[:num_rows] if field.ndim else field, result)
 
 
@@ -109,8 +114,6 @@ def _first_rows(result, num_rows: int):
 @jax.jit
 @searched_whole(rows="x")
 def _all_to_all(x, surface, radius, mask):
-    num_rows = x.shape[0]
-    (x,), mask = _whole_vectors((x,), mask)
     x, slave_ok = _inputs.sanitize_points(x, mask)
     segments = _inputs.resolve_segments(surface)
 
@@ -118,7 +121,7 @@ def _all_to_all(x, surface, radius, mask):
         return contact_from_choice(x, segments, choice, radius, no_overflow, slave_ok)
 
     no_overflow = jnp.zeros((), bool)
-    return _first_rows(_search_all(squared_distance, (x,), segments, slave_ok, assemble), num_rows)
+    return _search_all(squared_distance, (x,), segments, slave_ok, assemble)
 
 
 def swept(x_prev: Array, x: Array, surface: Surface, *, mask: Array | None = None) -> Crossing:
