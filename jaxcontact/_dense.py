@@ -82,6 +82,33 @@ def _lowest(kernel, rows, segments: Segments, slave_ok):
     return in_stages(jnp.any(slave_ok), [search], [jnp.full(slave_ok.shape, -1, jnp.int32)])
 
 
+# The swept search's rows come in whole vectors: with XLA's CPU fusion
+# emitters (its default code generator) it ran 3x slower on 81,937 or 81,939
+# rows than on 81,944 (python benchmarks/row_counts.py). Masked rows of zeros
+# fill the last vector; a real row never sees them. all_to_all is slower on
+# such counts too (2.5x, 81,939 against 81,936 rows), but padding it the same
+# way did not help: the cause is elsewhere, not found yet.
+ROW_MULTIPLE = 8
+
+
+def _whole_vectors(rows: tuple, mask):
+    """``rows`` (each f[N, 2]) and ``mask``, padded with masked rows to a
+    multiple of ``ROW_MULTIPLE``."""
+    extra = -rows[0].shape[0] % ROW_MULTIPLE
+    if extra == 0:
+        return rows, mask
+    ok = jnp.ones(rows[0].shape[0], bool) if mask is None else mask
+    padded = tuple(jnp.pad(r, ((0, extra), (0, 0))) for r in rows), jnp.pad(ok, (0, extra))
+    # Written out once: a pad fused into the search's loops would keep the odd count.
+    return jax.lax.optimization_barrier(padded)
+
+
+def _first_rows(result, num_rows: int):
+    """``result`` (a ``Contact`` or ``Crossing``) cut back to its first ``num_rows`` rows."""
+    result = jax.lax.optimization_barrier(result)  # the search writes whole vectors too
+    return jax.tree.map(lambda field: field[:num_rows] if field.ndim else field, result)
+
+
 # Compiled as one program even when called outside jit: op by op, the unrolled
 # search took seconds to dispatch on a new shape.
 @jax.jit
@@ -130,6 +157,8 @@ def swept(x_prev: Array, x: Array, surface: Surface, *, mask: Array | None = Non
 @jax.jit
 @searched_whole(rows="x")
 def _swept(x_prev, x, surface, mask):
+    num_rows = x.shape[0]
+    (x_prev, x), mask = _whole_vectors((x_prev, x), mask)
     x_prev, x, slave_ok = _inputs.sanitize_paths(x_prev, x, mask)
     segments = _inputs.resolve_segments(surface)
 
@@ -137,4 +166,5 @@ def _swept(x_prev, x, surface, mask):
         return crossing_from_choice(x_prev, x, segments, choice, no_overflow, slave_ok)
 
     no_overflow = jnp.zeros((), bool)
-    return _search_all(first_hit_time, (x_prev, x), segments, slave_ok, assemble)
+    crossing = _search_all(first_hit_time, (x_prev, x), segments, slave_ok, assemble)
+    return _first_rows(crossing, num_rows)

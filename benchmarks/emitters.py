@@ -1,0 +1,116 @@
+"""XLA's two CPU code generators, per program: run time and compile time.
+
+XLA compiles CPU fusions with its "fusion emitters" by default; the debug
+option ``xla_cpu_use_fusion_emitters=false`` selects its older emitters.
+jaxcontact keeps XLA's defaults; this script shows what the other choice
+would give: each program is compiled both ways in one process (``jax.jit(...,
+compiler_options=...)``, as top-level programs), checked to give the same
+answer, and timed interleaved, call by call.
+
+The scenes are docs/scenes.md's: the cutting scene, tool tip in the workpiece
+(x = 18, previous tip 18.2), and the rough die; float32.
+
+    python benchmarks/emitters.py            # cutting 81,939 nodes, rough die 10^5 x 10^4
+    python benchmarks/emitters.py --quick    # cutting 8,000 nodes, rough die 10^4 x 10^3
+"""
+
+from __future__ import annotations
+
+import argparse
+import functools
+import inspect
+import sys
+import time
+
+import jax
+import numpy as np
+
+from jaxcontact import Search, _dense
+from jaxcontact._bucket import sized_bucket_sort, sized_bucket_swept
+from jaxcontact._sizes import measure
+from jaxcontact.bench._run import machine
+from jaxcontact.scenes import cutting_scene, rough_die_scene
+
+OLDER_EMITTERS = {"xla_cpu_use_fusion_emitters": False}
+
+
+def compiled_both_ways(fn, args):
+    """[(executable, compile seconds)] with the default emitters, then the older ones."""
+    out = []
+    for options in (None, OLDER_EMITTERS):
+        jitted = jax.jit(fn, compiler_options=options) if options else jax.jit(fn)
+        began = time.perf_counter()
+        executable = jitted.lower(*args).compile()
+        out.append((executable, time.perf_counter() - began))
+    return out
+
+
+def race(executables, args, repeats: int) -> list[float]:
+    """Median seconds of each executable, timed call by call in turn."""
+    times = [[] for _ in executables]
+    for executable in executables:  # warm-up, and the answers compared
+        jax.block_until_ready(executable(*args))
+    first, second = (executable(*args) for executable in executables)
+    for a, b in zip(jax.tree.leaves(first), jax.tree.leaves(second), strict=True):
+        np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
+    for _ in range(repeats):
+        for executable, taken in zip(executables, times, strict=True):
+            began = time.perf_counter()
+            jax.block_until_ready(executable(*args))
+            taken.append(time.perf_counter() - began)
+    return [float(np.median(taken)) for taken in times]
+
+
+def programs(quick: bool):
+    """(scene label, program label, function, arguments)."""
+    cut = cutting_scene(8_000 if quick else 81_939, 18.0, x_tip_prev=18.2)
+    die = rough_die_scene(10_000, 1_000) if quick else rough_die_scene(100_000, 10_000)
+    label = f"cutting, {cut.x.shape[0]:,} nodes"
+    dense_closest = inspect.unwrap(_dense._all_to_all)
+    dense_swept = inspect.unwrap(_dense._swept)
+    closest_sizes = measure(cut.x, cut.surface, radius=cut.radius)
+    path_sizes = measure(cut.x, cut.surface, x_prev=cut.x_prev)
+    search = Search(radius=cut.radius)
+    state = search.allocate(cut.x, cut.surface)
+    die_sizes = measure(die.x, die.surface, radius=die.radius)
+    die_label = f"rough die, {die.x.shape[0]:,} x {die.surface.segments.shape[0]:,}"
+    return [
+        (label, "all_to_all", functools.partial(dense_closest, radius=cut.radius, mask=None),
+         (cut.x, cut.surface)),
+        (label, "swept", functools.partial(dense_swept, mask=None),
+         (cut.x_prev, cut.x, cut.surface)),
+        (label, "bucket_sort (sized)",
+         functools.partial(sized_bucket_sort, radius=cut.radius, sizes=closest_sizes),
+         (cut.x, cut.surface)),
+        (label, "bucket_swept (sized)", functools.partial(sized_bucket_swept, sizes=path_sizes),
+         (cut.x_prev, cut.x, cut.surface)),
+        (label, "Search.closest", search.closest, (state, cut.x, cut.surface)),
+        (die_label, "bucket_sort (sized)",
+         functools.partial(sized_bucket_sort, radius=die.radius, sizes=die_sizes),
+         (die.x, die.surface)),
+    ]  # fmt: skip
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="smaller scenes, fewer repeats")
+    parser.add_argument("--repeats", type=int, default=None, help="timed calls per program")
+    args = parser.parse_args(argv)
+    repeats = args.repeats or (10 if args.quick else 40)
+    command = "python benchmarks/emitters.py" + (" --quick" if args.quick else "")
+    print(f"`{command}`; {machine()}; float32; medians of {repeats} interleaved calls.\n")
+    print(
+        "| scene | program | run, fusion emitters | run, older emitters | older / fusion "
+        "| compile, fusion | compile, older |"
+    )
+    print("|---|---|---:|---:|---:|---:|---:|")
+    for scene, name, fn, fn_args in programs(args.quick):
+        (fusion, fusion_s), (older, older_s) = compiled_both_ways(fn, fn_args)
+        fusion_run, older_run = race([fusion, older], fn_args, repeats)
+        print(f"| {scene} | `{name}` | {fusion_run * 1e3:.2f} ms | {older_run * 1e3:.2f} ms "
+              f"| {older_run / fusion_run:.2f} | {fusion_s:.2f} s | {older_s:.2f} s |")  # fmt: skip
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
