@@ -362,7 +362,11 @@ def unavailable(name: str) -> str | None:
       >>> unavailable("NumPy dense") is None
       True
     """
-    module = PEERS[name][0]
+    return unavailable_module(PEERS[name][0])
+
+
+def unavailable_module(module: str | None) -> str | None:
+    """Why ``module`` (None: no module needed) does not import here, or None."""
     if module is None:
         return None
     try:
