@@ -42,7 +42,7 @@ import numpy as np
 MAX_CELLS_PER_SEGMENT = 64
 # A segment's box is inflated by the radius and this fraction of it more, so
 # that float64 rounding of ``min(a, b) - radius`` cannot drop a slave at the radius.
-_PAD = 1e-6
+PAD = 1e-6
 # Rows per block dealt to a thread (``threads > 1``).
 BLOCK = 1024
 
@@ -239,149 +239,180 @@ def _kernels():
                 if best_k >= 0:
                     segment[row], t[row], crossed[row] = best_k, best, True
 
-    def chunked(rows):
-        """``rows(part, parts, ...)`` over all rows: in one call, or one part per thread."""
+    @njit
+    def grid_over(low, high, cell):
+        """f64[7] grid over the boxes ``[low, high]`` (f64[M, 2]): origin x and y, cell edge,
+        top x and y, cells in x and in y. ``cell`` is widened where the grid would
+        hold more than ``MAX_CELLS_PER_SEGMENT`` cells per box."""
+        origin_x, origin_y = low[:, 0].min(), low[:, 1].min()
+        top_x, top_y = high[:, 0].max(), high[:, 1].max()
+        width, height = max(top_x - origin_x, 1e-300), max(top_y - origin_y, 1e-300)
+        cell = max(cell, np.sqrt(width * height / (MAX_CELLS_PER_SEGMENT * low.shape[0])))
+        nx, ny = max(1.0, np.ceil(width / cell)), max(1.0, np.ceil(height / cell))
+        return np.array([origin_x, origin_y, cell, top_x, top_y, nx, ny])
 
-        @njit
-        def serial(*args):
-            rows(0, 1, *args)
+    @njit
+    def boxes(start, end, inflation):
+        """f64[M, 2] low and high corners of the segments' boxes, inflated."""
+        low = np.empty((start.shape[0], 2))
+        high = np.empty((start.shape[0], 2))
+        for k in range(start.shape[0]):
+            for axis in range(2):
+                a, b = np.float64(start[k, axis]), np.float64(end[k, axis])
+                low[k, axis] = min(a, b) - inflation
+                high[k, axis] = max(a, b) + inflation
+        return low, high
 
-        @numba.njit(cache=False, parallel=True)
-        def parallel(parts, *args):
-            for part in numba.prange(parts):
-                rows(part, parts, *args)
+    @njit
+    def median_length(start, end):
+        length = np.empty(start.shape[0])
+        for k in range(start.shape[0]):
+            dx = np.float64(end[k, 0]) - np.float64(start[k, 0])
+            dy = np.float64(end[k, 1]) - np.float64(start[k, 1])
+            length[k] = np.sqrt(dx * dx + dy * dy)
+        return np.median(length)
 
-        return serial, parallel
+    @njit
+    def closest_setup(start, end, radius, cell):
+        """The closest-point grid: ``(grid, first, items)``.
+
+        Cell edge (``cell <= 0``): half the radius-inflated median segment box,
+        ``median length / 2 + radius``. Chosen by timing this query on one
+        thread (median of 15 calls) on the reference scenes at small sizes,
+        with edges ``f (median + 2 radius)`` (``median + 2 radius``: the
+        inflated box of the median segment) and with other rules. On the
+        cutting scene at 81,939 nodes every rule took 0.16-0.20 ms (20
+        segments: the pass over the slaves is the cost) except the longest
+        segment's box (0.35 ms). On the rough die at (10^4, 10^3), (10^5,
+        10^4) and (2 10^4, 10^5): f = 0.25 took 0.16, 2.5 and 12.3 ms; 0.5
+        0.14, 2.8 and 7.4 ms; 0.7 0.15, 3.1 and 6.9 ms; 1 0.16, 3.9 and 7.7
+        ms; 2 0.23, 6.8 and 12.4 ms; the longest segment's box 0.18 and 4.0
+        ms, ``sqrt(box area / M)`` 0.18 and 2.9 ms (first two only). So 0.5:
+        within 11% of the best on every scene.
+        """
+        if cell <= 0:
+            cell = median_length(start, end) / 2 + radius
+        low, high = boxes(start, end, radius * (1 + PAD))
+        grid = grid_over(low, high, cell)
+        first, items = bin_boxes(low, high, grid[0], grid[1], grid[2], int(grid[5]), int(grid[6]))
+        return grid, first, items
+
+    @njit
+    def swept_setup(start, end, cell):
+        """The path grid: ``(grid, first, items)``.
+
+        Cell edge (``cell <= 0``): the larger of the median segment length and
+        ``sqrt(area / M)``, ``area`` the segments' box's (about as many cells
+        as segments). Timed as ``closest_setup``: on the reference scenes with
+        paths (the cutting scene at 81,939 nodes, tool in and clear, 0.2 of
+        travel; the paper's Tests 1 and 2 at 82,369 and 63,001 nodes) every
+        rule tried took 0.27-0.34 ms, the pass over the paths, as those tools
+        have 2 or 20 segments (the longest segment: 0.43 ms with the tool
+        in). So the rule was chosen on the rough die (10^4 and 10^5 segments)
+        with its slaves given paths 0.03 and 0.3 long (not a reference scene:
+        none has many segments and motion), three cases: ``sqrt(area / M)``
+        took 2.5, 8.3 and 3.7 ms, the median segment length 9.6, 36 and 85
+        ms, 4 times it 2.9, 12 and 69 ms, the median path length 2.9, 32 and
+        4.2 ms; the larger of the median segment length and ``sqrt(area /
+        M)`` 2.5, 7.8 and 3.8 ms.
+        """
+        low, high = boxes(start, end, 0.0)
+        if cell <= 0:
+            width = high[:, 0].max() - low[:, 0].min()
+            height = high[:, 1].max() - low[:, 1].min()
+            cell = max(median_length(start, end), np.sqrt(width * height / start.shape[0]))
+        grid = grid_over(low, high, cell)
+        first, items = bin_boxes(low, high, grid[0], grid[1], grid[2], int(grid[5]), int(grid[6]))
+        return grid, first, items
+
+    # One numba call per query, grid included: the set-up on the host in NumPy
+    # cost 30 us a call more (10 small NumPy calls and three dispatches).
+    @njit
+    def closest_serial(x, start, end, radius, cell):
+        grid, first, items = closest_setup(start, end, radius, cell)
+        n = x.shape[0]
+        segment, gap, found = np.empty(n, np.int64), np.empty(n, x.dtype), np.empty(n, np.bool_)
+        closest_rows(0, 1, x, start, end, radius, grid, first, items, segment, gap, found)
+        return segment, gap, found
+
+    @numba.njit(cache=False, parallel=True)
+    def closest_parallel(x, start, end, radius, cell, parts):
+        grid, first, items = closest_setup(start, end, radius, cell)
+        n = x.shape[0]
+        segment, gap, found = np.empty(n, np.int64), np.empty(n, x.dtype), np.empty(n, np.bool_)
+        for part in numba.prange(parts):
+            closest_rows(
+                part, parts, x, start, end, radius, grid, first, items, segment, gap, found
+            )
+        return segment, gap, found
+
+    @njit
+    def swept_serial(x_prev, x, start, end, cell):
+        grid, first, items = swept_setup(start, end, cell)
+        n = x.shape[0]
+        segment, t, crossed = np.empty(n, np.int64), np.empty(n, x.dtype), np.empty(n, np.bool_)
+        swept_rows(0, 1, x_prev, x, start, end, grid, first, items, segment, t, crossed)
+        return segment, t, crossed
+
+    @numba.njit(cache=False, parallel=True)
+    def swept_parallel(x_prev, x, start, end, cell, parts):
+        grid, first, items = swept_setup(start, end, cell)
+        n = x.shape[0]
+        segment, t, crossed = np.empty(n, np.int64), np.empty(n, x.dtype), np.empty(n, np.bool_)
+        for part in numba.prange(parts):
+            swept_rows(part, parts, x_prev, x, start, end, grid, first, items, segment, t, crossed)
+        return segment, t, crossed
 
     return {
-        "bin_boxes": bin_boxes,
-        "closest": chunked(closest_rows),
-        "swept": chunked(swept_rows),
+        "closest": (closest_serial, closest_parallel),
+        "swept": (swept_serial, swept_parallel),
         "numba": numba,
     }
 
 
-def _grid(low, high, cell, count):
-    """f64[7]: origin x and y, cell edge, top x and y, cells in x and in y.
-
-    The cells cover ``[low, high]``; ``cell`` is widened where the grid
-    would hold more than ``MAX_CELLS_PER_SEGMENT * count`` cells.
-    """
-    extent = np.maximum(high - low, 1e-300)
-    cell = max(float(cell), float(np.sqrt(extent[0] * extent[1] / (MAX_CELLS_PER_SEGMENT * count))))
-    shape = np.maximum(1, np.ceil(extent / cell))
-    return np.array([low[0], low[1], cell, high[0], high[1], shape[0], shape[1]], np.float64)
-
-
-def closest_cell(start, end, radius):
-    """The closest-point grid's cell edge: half the radius-inflated median segment box.
-
-    That is ``median length / 2 + radius``. Chosen by timing the one-thread
-    kernel (median of 15 calls, one core) on the reference scenes at small
-    sizes with cell edges that are multiples of ``median + 2 radius`` (the
-    inflated box of the median segment) and with other rules: on the cutting
-    scene at 81,939 nodes every rule took 0.19-0.21 ms (20 segments: the
-    pass over the slaves is the cost) except the longest segment's box
-    (0.37 ms); on the rough die at (10^4, 10^3), (10^5, 10^4) and
-    (2 10^4, 10^5) the best factors were 0.35-0.7 (0.20, 3.1 and 10.9 ms),
-    against 0.23, 4.4 and 11.5 ms at 1 (``median + 2 radius``), 0.30, 7.2
-    and 16.0 ms at 2, 0.22, 4.2 ms for the longest segment's box and 0.22,
-    3.3 ms for ``sqrt(box area / M)``. So 0.5.
-    """
-    length = np.hypot(*(end - start).T)
-    return float(np.median(length)) / 2 + radius
-
-
-def closest(x, start, end, radius, *, threads=1, cell=None):
+def closest(x, start, end, radius, *, threads=1, cell=0.0):
     """``(segment, gap, found)`` of every slave: the closest segment within ``radius``.
 
     Args:
       x: f[N, 2] slaves, float32 or float64.
-      start: f[M, 2] segment starts (M >= 1).
+      start: f[M, 2] segment starts (M >= 1), the same dtype.
       end: f[M, 2] segment ends.
       radius: search radius.
       threads: 1 (one loop) or more (numba's ``prange``, one part per thread).
-      cell: cell edge; ``closest_cell`` when None.
+      cell: cell edge; 0 for the rule of ``closest_setup`` (see ``_kernels``).
 
     Returns:
       ``segment`` i64[N] (-1 where not found), ``gap`` f[N] in ``x``'s dtype
       (0 where not found), ``found`` bool[N]. Of segments at exactly equal
       distance, the larger signed normal distance, then the lower index.
     """
-    kernels = _kernels()
-    start64, end64 = np.asarray(start, np.float64), np.asarray(end, np.float64)
-    reach = radius * (1 + _PAD)
-    low = np.minimum(start64, end64) - reach  # f64[M, 2] inflated boxes
-    high = np.maximum(start64, end64) + reach
-    cell = closest_cell(start64, end64, radius) if cell is None else cell
-    grid = _grid(low.min(axis=0), high.max(axis=0), cell, len(start))
-    first, items = kernels["bin_boxes"](low, high, *grid[:3], int(grid[5]), int(grid[6]))
-    segment = np.empty(len(x), np.int64)
-    gap = np.empty(len(x), x.dtype)
-    found = np.empty(len(x), bool)
-    args = (x, start, end, float(radius), grid, first, items, segment, gap, found)
-    serial, parallel = kernels["closest"]
+    serial, parallel = _kernels()["closest"]
     if threads == 1:
-        serial(*args)
-    else:
-        kernels["numba"].set_num_threads(threads)
-        parallel(threads, *args)
-    return segment, gap, found
+        return serial(x, start, end, float(radius), float(cell))
+    _kernels()["numba"].set_num_threads(threads)
+    return parallel(x, start, end, float(radius), float(cell), threads)
 
 
-def swept_cell(start, end):
-    """The path grid's cell edge: the larger of the median segment length and ``sqrt(area / M)``.
-
-    ``area`` is the segments' box's, so the cells are about as many as the
-    segments. Timed as ``closest_cell``: on the reference scenes with paths
-    (the cutting scene at 81,939 nodes, tool in and clear, 0.2 of travel;
-    the paper's Tests 1 and 2 at 82,369 and 63,001 nodes) every rule tried
-    took 0.27-0.35 ms, the pass over the paths, as those tools have 2 or 20
-    segments. So the rule was chosen on the rough die (10^4 and 10^5
-    segments), its slaves given paths 0.03 and 0.3 long (not a reference
-    scene: none has many segments and motion): there ``sqrt(area / M)``
-    took 2.8, 8.9 and 7.1 ms, the median segment length 9.3, 36 and 89 ms,
-    4 times it 3.2, 12 and 74 ms, and the median path length 3.2, 32 and
-    7.8 ms.
-    """
-    low, high = np.minimum(start, end).min(axis=0), np.maximum(start, end).max(axis=0)
-    area = float(np.prod(high - low))
-    return max(float(np.median(np.hypot(*(end - start).T))), np.sqrt(area / len(start)))
-
-
-def swept(x_prev, x, start, end, *, threads=1, cell=None):
+def swept(x_prev, x, start, end, *, threads=1, cell=0.0):
     """``(segment, t, crossed)`` of every path ``x_prev -> x``: its first crossing.
 
     Args:
       x_prev: f[N, 2] path starts, float32 or float64.
       x: f[N, 2] path ends, the same dtype.
-      start: f[M, 2] segment starts (M >= 1).
+      start: f[M, 2] segment starts (M >= 1), the same dtype.
       end: f[M, 2] segment ends.
       threads: 1 (one loop) or more (numba's ``prange``, one part per thread).
-      cell: cell edge; ``swept_cell`` when None.
+      cell: cell edge; 0 for the rule of ``swept_setup`` (see ``_kernels``).
 
     Returns:
       ``segment`` i64[N] (-1 where none), ``t`` f[N] in ``x``'s dtype (0
       where none), ``crossed`` bool[N]. Exact ties in ``t`` go to the lower index.
     """
-    kernels = _kernels()
-    start64, end64 = np.asarray(start, np.float64), np.asarray(end, np.float64)
-    low = np.minimum(start64, end64)
-    high = np.maximum(start64, end64)
-    cell = swept_cell(start64, end64) if cell is None else cell
-    grid = _grid(low.min(axis=0), high.max(axis=0), cell, len(start))
-    first, items = kernels["bin_boxes"](low, high, *grid[:3], int(grid[5]), int(grid[6]))
-    segment = np.empty(len(x), np.int64)
-    t = np.empty(len(x), x.dtype)
-    crossed = np.empty(len(x), bool)
-    args = (x_prev, x, start, end, grid, first, items, segment, t, crossed)
-    serial, parallel = kernels["swept"]
+    serial, parallel = _kernels()["swept"]
     if threads == 1:
-        serial(*args)
-    else:
-        kernels["numba"].set_num_threads(threads)
-        parallel(threads, *args)
-    return segment, t, crossed
+        return serial(x_prev, x, start, end, float(cell))
+    _kernels()["numba"].set_num_threads(threads)
+    return parallel(x_prev, x, start, end, float(cell), threads)
 
 
 def compile_for(query, dtype, threads=1) -> float:
