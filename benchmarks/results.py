@@ -50,6 +50,9 @@ SECTIONS = {
         "Paper tests", "paper_tests.py", ("--out", "{out}"), "{out}/paper_tests.md"
     ),
     "peers": Section("Peers", "peers.py", ("--out", "{out}"), "{out}/peers.md"),
+    "swept_peers": Section(
+        "Peers: path crossing", "swept_peers.py", ("--out", "{out}"), "{out}/swept_peers.md"
+    ),
     "time_vs_error": Section(
         "Time against error", "time_vs_error.py", ("--out", "{out}"), "{out}/time_vs_error.md"
     ),
@@ -65,7 +68,18 @@ SECTIONS = {
         "{out}/long_process.md",
     ),
 }
-VERSIONED = ("jax", "jaxlib", "numpy", "scipy", "shapely", "matplotlib", "jax-md", "libigl")
+VERSIONED = (
+    "jax",
+    "jaxlib",
+    "numpy",
+    "scipy",
+    "shapely",
+    "matplotlib",
+    "jax-md",
+    "libigl",
+    "numba",
+    "ipctk",
+)
 
 
 def run_section(name: str, results: str, quick: bool, pinned: bool) -> str:

@@ -4,13 +4,16 @@ One module per benchmark, each with ``run(quick, out)`` (returns its markdown
 section and writes CSV and PNG files into ``out``) and ``main(argv)``:
 
 - ``paper_tests``: the source paper's Tests 1 and 2 (its Figs. 8 and 9);
-- ``peers``: jaxcontact beside NumPy, scipy, shapely, jax-md and libigl;
+- ``peers``: jaxcontact beside NumPy, scipy, shapely, jax-md, libigl, a
+  hand-written numba grid and IPC Toolkit;
+- ``swept_peers``: the same for the path-crossing query (``bucket_swept``
+  beside NumPy, the numba grid and IPC Toolkit's CCD);
 - ``time_vs_error``: run time against error, and float32 error against offset.
 
 ``oracle`` is the float64 reference every answer is checked against and
-``baselines`` holds the peers. Optional packages (matplotlib, tqdm, scipy,
-shapely, jax-md, libigl) are imported where used; a missing one is reported,
-never a crash.
+``baselines`` holds the peers (with ``numba_grid`` and ``ipc``). Optional
+packages (matplotlib, tqdm, scipy, shapely, jax-md, libigl, numba, ipctk) are
+imported where used; a missing one is reported, never a crash.
 """
 
 from __future__ import annotations
@@ -20,7 +23,7 @@ import os
 import sys
 import time
 
-MODULES = ("paper_tests", "peers", "time_vs_error")
+MODULES = ("paper_tests", "peers", "swept_peers", "time_vs_error")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

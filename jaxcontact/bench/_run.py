@@ -41,6 +41,7 @@ COLUMNS = (
     "wrong_segment",
     "max_gap_error",
     "wrong_by",
+    "max_t_error",
     "note",
 )
 

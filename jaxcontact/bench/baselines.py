@@ -4,11 +4,12 @@ Each peer takes NumPy arrays ``x`` f[N, 2], segment ``start`` and ``end``
 f[M, 2] and the ``radius``, and returns ``(segment, gap, found)`` as NumPy
 arrays (``segment`` -1 where not found), so one checker reads them all
 (``oracle.compare``). Optional packages are imported inside the functions:
-``available`` says which peers can run here, and why not.
+``unavailable`` says which peers cannot run here, and why.
 
 - NumPy dense: every slave-segment pair at once, ``argmin`` over segments.
 - NumPy box-then-dense: the paper's preliminary phase (slaves inside the
-  tool's box inflated by the radius), then dense on those.
+  tool's box inflated by the radius), then dense on those, on separate x and
+  y planes; and the first version, with (K, M, 2) tensors.
 - cKDTree: scipy's KD-tree on segment midpoints; candidates are the
   midpoints within ``radius + half the longest segment`` of a slave, then a
   NumPy projection of those pairs. Two routes: ``query_ball_point`` (Python
@@ -19,6 +20,10 @@ arrays (``segment`` -1 where not found), so one checker reads them all
   3 x 3 cells around its own; jitted.
 - libigl: ``point_mesh_squared_distance`` with the segments as 2D edges
   (an AABB tree, built on every call), then ``found`` where within radius.
+- numba grid: a uniform grid written by hand in numba (``numba_grid``), one
+  thread, and the same over ``prange`` on 2 threads; compiled ahead.
+- IPC Toolkit: its LBVH broad phase for the slave-segment pairs within the
+  radius (``ipc.lbvh_pairs``), then a NumPy projection of those pairs.
 """
 
 from __future__ import annotations
@@ -27,6 +32,8 @@ import functools
 import importlib
 
 import numpy as np
+
+from jaxcontact.bench import ipc, numba_grid
 
 
 def cross(u, v):
@@ -92,11 +99,84 @@ def numpy_dense(x, start, end, radius):
     return dense_closest(np, x, start, end, radius)
 
 
-def numpy_box_then_dense(x, start, end, radius):
-    """The paper's preliminary phase in NumPy: slaves in the inflated tool box, then dense."""
+def _in_box(x, start, end, radius):
+    """i[K]: the slaves in the segments' box inflated by ``radius`` (the paper's first phase)."""
     low = np.minimum(start, end).min(axis=0) - radius
     high = np.maximum(start, end).max(axis=0) + radius
-    inside = np.flatnonzero(np.all((x >= low) & (x <= high), axis=1))
+    column_x, column_y = x[:, 0], x[:, 1]
+    return np.flatnonzero(
+        (column_x >= low[0]) & (column_x <= high[0]) & (column_y >= low[1]) & (column_y <= high[1])
+    )
+
+
+# Slave-segment pairs per block of box-then-dense: four float32 (K, M) planes of
+# 1 MB stay in cache. On the rough die at (10^4, 10^3) and (10^4, 10^4) the
+# whole box at once took 45 and 412 ms, blocks of 2^16 pairs 21 and 461 ms
+# (Python's loop shows at 6 rows a block), 2^18 23 and 232 ms, 2^20 25 and
+# 214 ms; the cutting scene (2,000 slaves in the box, 20 segments) is one block.
+BLOCK_PAIRS = 2**18
+
+
+def numpy_box_then_dense(x, start, end, radius):
+    """The paper's preliminary phase in NumPy, then dense on separate coordinate planes.
+
+    The slaves inside the tool's box inflated by the radius are projected on
+    every segment, ``BLOCK_PAIRS // M`` slaves at a time, with x and y as
+    separate (K, M) planes (no (K, M, 2) tensor, no reductions over a
+    trailing axis of 2), updated in place where that saves a temporary;
+    ``argmin`` over the segments, then the gap of the chosen pair alone.
+    """
+    inside = _in_box(x, start, end, radius)
+    segment = np.full(len(x), -1)
+    gap = np.zeros(len(x), x.dtype)
+    found = np.zeros(len(x), bool)
+    rows = max(1, BLOCK_PAIRS // len(start))
+    for first in range(0, inside.size, rows):
+        block = inside[first : first + rows]
+        nearest, signed, within = _closest_on_planes(x[block], start, end, radius)
+        segment[block[within]] = nearest[within]
+        gap[block[within]] = signed[within]
+        found[block[within]] = True
+    return segment, gap, found
+
+
+def _closest_on_planes(x, start, end, radius):
+    """``(segment, gap, within)`` f[K] of slaves ``x`` f[K, 2] on every segment, by planes."""
+    slave_x, slave_y = x[:, 0][:, None], x[:, 1][:, None]  # f[K, 1]
+    start_x, start_y = start[:, 0], start[:, 1]  # f[M]
+    step_x, step_y = end[:, 0] - start_x, end[:, 1] - start_y
+    inverse_length_squared = 1 / (step_x * step_x + step_y * step_y)
+    from_x = slave_x - start_x  # f[K, M]
+    from_y = slave_y - start_y
+    xi = from_x * step_x
+    scratch = from_y * step_y
+    xi += scratch
+    xi *= inverse_length_squared
+    np.clip(xi, 0, 1, out=xi)
+    # from_x, from_y become the offset x - p, then its squared length.
+    np.multiply(xi, step_x, out=scratch)
+    from_x -= scratch
+    np.multiply(xi, step_y, out=scratch)
+    from_y -= scratch
+    from_x *= from_x
+    from_y *= from_y
+    from_x += from_y
+    nearest = np.argmin(from_x, axis=1)  # i[K]
+    rows = np.arange(len(x))
+    distance_squared = from_x[rows, nearest]
+    # The chosen pair's offset again (K pairs, not K x M) for the sign of the gap.
+    t = xi[rows, nearest]
+    offset_x = slave_x[:, 0] - start_x[nearest] - t * step_x[nearest]
+    offset_y = slave_y[:, 0] - start_y[nearest] - t * step_y[nearest]
+    outward = offset_x * step_y[nearest] - offset_y * step_x[nearest]
+    distance = np.sqrt(distance_squared)
+    signed = np.where(outward < 0, -distance, distance)
+    return nearest, signed, distance_squared <= radius * radius
+
+
+def numpy_box_then_dense_tensor(x, start, end, radius):
+    """The same first phase, then ``numpy_dense`` with its (K, M, 2) tensors: the first version."""
+    inside = _in_box(x, start, end, radius)
     segment = np.full(len(x), -1)
     gap = np.zeros(len(x), x.dtype)
     found = np.zeros(len(x), bool)
@@ -252,19 +332,41 @@ def jaxmd_cell_list(x, start, end, radius):
     return detect, tuple(jnp.asarray(a) for a in (x, start, end))
 
 
+def ipctk_lbvh_project(x, start, end, radius):
+    """IPC Toolkit's LBVH pairs (``ipc.lbvh_pairs``), then the NumPy projection of those pairs."""
+    return closest_of_pairs(x, start, end, radius, *ipc.lbvh_pairs(x, start, end, radius))
+
+
+def _numba_grid(threads):
+    """prepare for ``numba_grid.closest`` on ``threads``: compiled ahead (``fn.compile_s``)."""
+
+    def prepare(x, start, end, radius):
+        compile_s = numba_grid.compile_for("closest", x.dtype, threads)
+        fn = functools.partial(numba_grid.closest, radius=radius, threads=threads)
+        fn.compile_s = compile_s  # reported apart, as a jitted peer's compilation is
+        return fn, (x, start, end)
+
+    return prepare
+
+
 def _plain(peer):
     return lambda x, start, end, radius: (functools.partial(peer, radius=radius), (x, start, end))
 
 
-# name -> (module it needs, or None; prepare(x, start, end, radius) -> (fn, args)).
+# name -> (module it needs, or None; prepare(x, start, end, radius) -> (fn, args)). A plain
+# fn with a ``compile_s`` attribute was compiled by prepare, outside the timer.
 PEERS = {
     "NumPy dense": (None, _plain(numpy_dense)),
     "NumPy box-then-dense": (None, _plain(numpy_box_then_dense)),
+    "NumPy box-then-dense, (N, M, 2)": (None, _plain(numpy_box_then_dense_tensor)),
     "cKDTree ball + NumPy projection": ("scipy", _plain(kdtree_project)),
     "cKDTree pairs + NumPy projection": ("scipy", _plain(kdtree_pairs_project)),
     "shapely STRtree": ("shapely", _plain(shapely_strtree)),
     "jax-md cell list": ("jax_md", jaxmd_cell_list),
     "libigl point_mesh_squared_distance": ("igl", _plain(libigl_distance)),
+    "numba grid (1 thread)": ("numba", _numba_grid(1)),
+    "numba grid (prange, 2 threads)": ("numba", _numba_grid(2)),
+    "IPC Toolkit LBVH + NumPy projection": ("ipctk", _plain(ipctk_lbvh_project)),
 }
 
 
@@ -275,7 +377,11 @@ def unavailable(name: str) -> str | None:
       >>> unavailable("NumPy dense") is None
       True
     """
-    module = PEERS[name][0]
+    return unavailable_module(PEERS[name][0])
+
+
+def unavailable_module(module: str | None) -> str | None:
+    """Why ``module`` (None: no module needed) does not import here, or None."""
     if module is None:
         return None
     try:

@@ -69,7 +69,7 @@ def _skip_reason(name, x, start, end, radius, quick) -> str | None:
     pairs = len(x) * len(start)
     if name == "NumPy dense" and pairs > PAIR_BUDGET:
         return f"skipped: (N, M) plane of {pairs:.0e} pairs > {PAIR_BUDGET:.0e}"
-    if name == "NumPy box-then-dense":
+    if name.startswith("NumPy box-then-dense"):
         low = np.minimum(start, end).min(axis=0) - radius
         high = np.maximum(start, end).max(axis=0) + radius
         inside = int(np.all((x >= low) & (x <= high), axis=1).sum())
@@ -116,7 +116,9 @@ def run_scene(kind, size, parameter, repeats, slow_s, quick=False) -> list[dict]
             continue
         fn, args = method if isinstance(method, tuple) else method(x, start, end, scene.radius)
         jitted = hasattr(fn, "lower")
-        call, compile_s = compiled_call(fn, args) if jitted else (fn, None)
+        call, compile_s = (
+            compiled_call(fn, args) if jitted else (fn, getattr(fn, "compile_s", None))
+        )
         began = time.perf_counter()
         result = jax.block_until_ready(call(*args))  # the answer checked, and a warm-up
         first_s = time.perf_counter() - began
