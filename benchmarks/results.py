@@ -61,6 +61,8 @@ SECTIONS = {
     ),
     "stability": Section("Stability", "stability.py", ("--out", "{out}")),
     "simulate": Section("Simulation", "simulate.py"),
+    "row_counts": Section("Run time against the exact row count", "row_counts.py"),
+    "emitters": Section("XLA's CPU code generators", "emitters.py"),
     "long_process": Section(
         "Long processes: memory maps",
         "long_process.py",
