@@ -87,6 +87,7 @@ def _path_arrays(scene):
     return np.asarray(scene.x_prev), np.asarray(scene.x), start, end
 
 
+@pytest.mark.x64  # the reference is swept in float64
 @pytest.mark.parametrize("name", list(swept_peers.SWEPT_PEERS))
 def test_every_swept_peer_agrees_with_float64_swept(name):
     module = swept_peers.SWEPT_PEERS[name][0]
@@ -139,6 +140,7 @@ def test_numba_closest_with_no_slaves():
     assert segment.shape == gap.shape == found.shape == (0,) and gap.dtype == np.float32
 
 
+@pytest.mark.x64
 def test_a_wrong_crossing_is_counted():
     scene = cutting_scene(500, 18.0, x_tip_prev=19.5)
     x_prev, x, start, end = _path_arrays(scene)
@@ -155,6 +157,7 @@ def test_a_wrong_crossing_is_counted():
     assert float(fields["max_t_error"]) >= 0.01
 
 
+@pytest.mark.x64
 def test_swept_peer_rows(monkeypatch):
     # The NumPy peer only (CI has no numba or ipctk), and the skip path.
     monkeypatch.setattr(
