@@ -84,7 +84,7 @@ def _lowest(kernel, rows, segments: Segments, slave_ok):
 
 # The swept search's rows come in whole vectors: with XLA's CPU fusion
 # emitters (its default code generator) it ran 3x slower on 81,937 or 81,939
-# rows than on 81,944 (python benchmarks/row_counts.py). Masked rows of zeros
+# rows than padded to 81,944 (python benchmarks/row_counts.py). Masked rows of zeros
 # fill the last vector; a real row never sees them. all_to_all is slower on
 # such counts too (2.5x, 81,939 against 81,936 rows), but padding it the same
 # way did not help: the cause is elsewhere, not found yet.
