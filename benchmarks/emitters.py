@@ -23,7 +23,7 @@ import sys
 import time
 
 import jax
-import numpy as np
+from row_counts import medians  # benchmarks/, beside this script
 
 from jaxcontact import Search, _dense
 from jaxcontact._bucket import sized_bucket_sort, sized_bucket_swept
@@ -43,22 +43,6 @@ def compiled_both_ways(fn, args):
         executable = jitted.lower(*args).compile()
         out.append((executable, time.perf_counter() - began))
     return out
-
-
-def race(executables, args, repeats: int) -> list[float]:
-    """Median seconds of each executable, timed call by call in turn."""
-    times = [[] for _ in executables]
-    for executable in executables:  # warm-up, and the answers compared
-        jax.block_until_ready(executable(*args))
-    first, second = (executable(*args) for executable in executables)
-    for a, b in zip(jax.tree.leaves(first), jax.tree.leaves(second), strict=True):
-        np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
-    for _ in range(repeats):
-        for executable, taken in zip(executables, times, strict=True):
-            began = time.perf_counter()
-            jax.block_until_ready(executable(*args))
-            taken.append(time.perf_counter() - began)
-    return [float(np.median(taken)) for taken in times]
 
 
 def programs(quick: bool):
@@ -106,7 +90,7 @@ def main(argv=None) -> int:
     print("|---|---|---:|---:|---:|---:|---:|")
     for scene, name, fn, fn_args in programs(args.quick):
         (fusion, fusion_s), (older, older_s) = compiled_both_ways(fn, fn_args)
-        fusion_run, older_run = race([fusion, older], fn_args, repeats)
+        fusion_run, older_run = medians([fusion, older], fn_args, repeats)
         print(f"| {scene} | `{name}` | {fusion_run * 1e3:.2f} ms | {older_run * 1e3:.2f} ms "
               f"| {older_run / fusion_run:.2f} | {fusion_s:.2f} s | {older_s:.2f} s |")  # fmt: skip
     return 0

@@ -20,7 +20,7 @@ import numpy as np
 
 from jaxcontact import _bucket
 from jaxcontact.bench import oracle
-from jaxcontact.bench.timing import pinned_note
+from jaxcontact.bench.timing import Timing, pinned_note, time_interleaved
 
 COLUMNS = (
     "scene",
@@ -63,6 +63,31 @@ def row(scene, nodes, segments, method, timing=None, mismatch=None, **fields) ->
         out["wrong_by"] = f"{mismatch.wrong_by:.3g}"
     out.update(fields)
     return out
+
+
+def time_or_note(entry, name, call, args, first_s, slow_s, timed, single) -> None:
+    """Queues ``call`` for the round-robin in ``timed``, or, when its first call
+    took over ``slow_s`` seconds, keeps that one call as its time in ``single``
+    and says so in ``entry["note"]``."""
+    if first_s > slow_s:
+        single[name] = Timing(None, first_s, first_s, first_s, 1)
+        entry["note"] += f"; first call {first_s:.1f} s > {slow_s:g} s: timed once"
+    else:
+        timed[name] = (call, args)
+
+
+def add_timings(rows, timed, single, repeats, library) -> list[dict]:
+    """``rows`` with each method's timing and its ratio to ``library``'s median;
+    ``timed`` run round-robin (``time_interleaved``), ``single`` as they are."""
+    timings = {**time_interleaved(timed, repeats=repeats, warmup=0), **single}
+    library_ms = timings[library].median_s * 1e3
+    for entry in rows:
+        timing = timings.get(entry["method"])
+        if timing is None:
+            continue
+        entry.update({**timing_fields(timing), "compile_s": entry["compile_s"]})
+        entry["ratio"] = f"{timing.median_s * 1e3 / library_ms:.2f}"
+    return rows
 
 
 def timing_fields(timing) -> dict:

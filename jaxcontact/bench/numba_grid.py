@@ -69,6 +69,15 @@ def _kernels():
         return min(max(index, 0), count - 1)
 
     @njit
+    def box_cells(low_x, low_y, high_x, high_y, origin_x, origin_y, cell, nx, ny):
+        """``(i0, i1, j0, j1)``: the inclusive cell ranges a box covers."""
+        i0 = cell_index(low_x, origin_x, cell, nx)
+        i1 = cell_index(high_x, origin_x, cell, nx)
+        j0 = cell_index(low_y, origin_y, cell, ny)
+        j1 = cell_index(high_y, origin_y, cell, ny)
+        return i0, i1, j0, j1
+
+    @njit
     def bin_boxes(low, high, origin_x, origin_y, cell, nx, ny):
         """CSR lists of the boxes ``[low, high]`` (f64[M, 2]) in each cell.
 
@@ -77,10 +86,9 @@ def _kernels():
         """
         count = np.zeros(nx * ny + 1, np.int64)
         for k in range(low.shape[0]):
-            i0 = cell_index(low[k, 0], origin_x, cell, nx)
-            i1 = cell_index(high[k, 0], origin_x, cell, nx)
-            j0 = cell_index(low[k, 1], origin_y, cell, ny)
-            j1 = cell_index(high[k, 1], origin_y, cell, ny)
+            i0, i1, j0, j1 = box_cells(
+                low[k, 0], low[k, 1], high[k, 0], high[k, 1], origin_x, origin_y, cell, nx, ny
+            )
             for j in range(j0, j1 + 1):
                 for i in range(i0, i1 + 1):
                     count[j * nx + i + 1] += 1
@@ -88,10 +96,9 @@ def _kernels():
         cursor = first[:-1].copy()
         items = np.empty(first[-1], np.int64)
         for k in range(low.shape[0]):
-            i0 = cell_index(low[k, 0], origin_x, cell, nx)
-            i1 = cell_index(high[k, 0], origin_x, cell, nx)
-            j0 = cell_index(low[k, 1], origin_y, cell, ny)
-            j1 = cell_index(high[k, 1], origin_y, cell, ny)
+            i0, i1, j0, j1 = box_cells(
+                low[k, 0], low[k, 1], high[k, 0], high[k, 1], origin_x, origin_y, cell, nx, ny
+            )
             for j in range(j0, j1 + 1):
                 for i in range(i0, i1 + 1):
                     items[cursor[j * nx + i]] = k
@@ -211,10 +218,9 @@ def _kernels():
                 low_y, high_y = min(py, qy), max(py, qy)
                 if high_x < origin_x or low_x > top_x or high_y < origin_y or low_y > top_y:
                     continue
-                i0 = cell_index(low_x, origin_x, cell, nx)
-                i1 = cell_index(high_x, origin_x, cell, nx)
-                j0 = cell_index(low_y, origin_y, cell, ny)
-                j1 = cell_index(high_y, origin_y, cell, ny)
+                i0, i1, j0, j1 = box_cells(
+                    low_x, low_y, high_x, high_y, origin_x, origin_y, cell, nx, ny
+                )
                 best, best_k = 2.0, -1
                 for j in range(j0, j1 + 1):
                     for i in range(i0, i1 + 1):

@@ -30,7 +30,7 @@ import numpy as np
 from jaxcontact import swept
 from jaxcontact._sizes import measure
 from jaxcontact.bench import _run, baselines, ipc, numba_grid
-from jaxcontact.bench.timing import Timing, compiled_call, time_interleaved
+from jaxcontact.bench.timing import compiled_call
 from jaxcontact.scenes import cutting_scene, paper_scene
 
 LIBRARY = "bucket_swept (sized)"
@@ -177,22 +177,10 @@ def run_scene(kind, size, parameters, repeats, slow_s) -> list[dict]:
         if hasattr(result, "crossed"):
             result = (result.segment, result.t, result.crossed)
         entry.update(compare_crossing(result, reference, x_prev, x, start, end))
-        if first_s > slow_s:
-            single[name] = Timing(None, first_s, first_s, first_s, 1)
-            entry["note"] += f"; first call {first_s:.1f} s > {slow_s:g} s: timed once"
-        else:
-            timed[name] = (call, args)
+        _run.time_or_note(entry, name, call, args, first_s, slow_s, timed, single)
         entry["compile_s"] = "" if compile_s is None else round(compile_s, 3)
         rows.append(entry)
-    timings = {**time_interleaved(timed, repeats=repeats, warmup=0), **single}
-    library_ms = timings[LIBRARY].median_s * 1e3
-    for entry in rows:
-        timing = timings.get(entry["method"])
-        if timing is None:
-            continue
-        entry.update({**_run.timing_fields(timing), "compile_s": entry["compile_s"]})
-        entry["ratio"] = f"{timing.median_s * 1e3 / library_ms:.2f}"
-    return rows
+    return _run.add_timings(rows, timed, single, repeats, LIBRARY)
 
 
 def run(quick: bool, out: str, repeats: int | None = None, slow_s: float | None = None) -> str:
