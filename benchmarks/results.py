@@ -63,6 +63,12 @@ SECTIONS = {
     "simulate": Section("Simulation", "simulate.py"),
     "row_counts": Section("Run time against the exact row count", "row_counts.py"),
     "emitters": Section("XLA's CPU code generators", "emitters.py"),
+    "size_scaling": Section(
+        "Size scaling: time, memory and compile time against N and M",
+        "size_scaling.py",
+        ("--out", "{out}"),
+        "{out}/size_scaling.md",
+    ),
     "long_process": Section(
         "Long processes: memory maps",
         "long_process.py",

@@ -225,18 +225,19 @@ def test_cli_registers_bench():
     assert args.quick and args.out == "somewhere" and callable(args.run)
 
 
-def _results_module():
+def _benchmark_module(name):
+    """``benchmarks/<name>.py``, a script rather than a package module, loaded from its path."""
     import importlib.util
 
-    path = pathlib.Path(__file__).resolve().parent.parent / "benchmarks" / "results.py"
-    spec = importlib.util.spec_from_file_location("benchmark_results", path)
+    path = pathlib.Path(__file__).resolve().parent.parent / "benchmarks" / f"{name}.py"
+    spec = importlib.util.spec_from_file_location(f"benchmark_{name}", path)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
 
 
 def test_results_assembles_stored_sections(tmp_path):
-    results = _results_module()
+    results = _benchmark_module("results")
     stored = tmp_path / "results"
     stored.mkdir()
     (stored / "peers.md").write_text("## Peers\n\ntable\n\n![peers.png](peers.png)\n")
@@ -253,6 +254,45 @@ def test_results_assembles_stored_sections(tmp_path):
     assert "Not run yet: `python benchmarks/results.py --sections dense`" in text
     if not (pathlib.Path(results.HERE) / "stability.py").exists():
         assert "`benchmarks/stability.py` is not in this checkout." in text
+
+
+def test_size_scaling_rows_slopes_and_figure(tmp_path, monkeypatch):
+    """One tiny rough die through the library's two programs (all_to_all over its pair
+    budget), then a sweep made up from its rows: the slopes, tables, CSV and figure."""
+    scaling = _benchmark_module("size_scaling")
+    monkeypatch.setattr(scaling, "PAIR_BUDGET", 1_000)
+    names = (scaling.LIBRARY, scaling.SEARCH, scaling.DENSE)
+    rows = scaling.run_scene(400, 40, repeats=2, slow_s=60, names=names)
+    by_method = {row["method"]: row for row in rows}
+    assert by_method[scaling.DENSE]["note"].startswith("not run: N*M too large")
+    for name in (scaling.LIBRARY, scaling.SEARCH):
+        row = by_method[name]
+        assert row["median_ms"] > 0 and row["runs"] == 2 and row["compile_s"] > 0
+        assert row["temp_mib"] > 0 and row["out_mib"] > 0  # XLA's account of the program
+        assert row["missed"] == row["false"] == row["wrong_segment"] == 0, row
+    assert "found again 0 times" in by_method[scaling.SEARCH]["note"]  # the state was reused
+
+    def grown(by_nodes, by_segments):  # the same rows at a larger size, time as size**0.75
+        factor = (by_nodes * by_segments) ** 0.75
+        return [
+            {
+                **row,
+                "nodes": row["nodes"] * by_nodes,
+                "segments": row["segments"] * by_segments,
+                "median_ms": row["median_ms"] and row["median_ms"] * factor,
+            }
+            for row in rows
+        ]
+
+    by_scene = {(400, 40): rows, (4_000, 40): grown(10, 1), (40_000, 40): grown(100, 1)}
+    by_scene[400, 400] = grown(1, 10)
+    sweeps = scaling.Sweeps((400, 4_000, 40_000), 40, (40, 400), 400)
+    text = scaling.report(by_scene, sweeps, names, str(tmp_path), quick=True, elapsed_s=1.0)
+    assert f"| {scaling.LIBRARY} | 0.75 | 0.75 | 0.75 | 0.75 | 3, 2 | 0.00 |" in text  # memory kept
+    assert f"| {scaling.DENSE} | — | — | — | — | 0, 0 | — |" in text
+    assert (tmp_path / "size_scaling.csv").exists()
+    if _run.pyplot(str(tmp_path)) is not None:
+        assert (tmp_path / "size_scaling.png").exists()
 
 
 def test_sizes_too_small_are_counted_as_missed_contacts():

@@ -14,13 +14,14 @@ import csv
 import os
 import platform
 import sys
+import time
 
 import jax
 import numpy as np
 
 from jaxcontact import _bucket
 from jaxcontact.bench import oracle
-from jaxcontact.bench.timing import Timing, pinned_note, time_interleaved
+from jaxcontact.bench.timing import Timing, compiled_call, pinned_note, time_interleaved
 
 COLUMNS = (
     "scene",
@@ -30,6 +31,9 @@ COLUMNS = (
     "method",
     "dtype",
     "compile_s",
+    "temp_mib",
+    "out_mib",
+    "args_mib",
     "median_ms",
     "p10_ms",
     "p90_ms",
@@ -58,11 +62,80 @@ def row(scene, nodes, segments, method, timing=None, mismatch=None, **fields) ->
     if timing is not None:
         out.update(timing_fields(timing))
     if mismatch is not None:
-        out.update(mismatch._asdict())
-        out["max_gap_error"] = f"{mismatch.max_gap_error:.3g}"
-        out["wrong_by"] = f"{mismatch.wrong_by:.3g}"
+        out.update(mismatch_fields(mismatch))
     out.update(fields)
     return out
+
+
+def mismatch_fields(mismatch) -> dict:
+    """The row fields of an oracle ``Mismatch``: its counts, the errors formatted."""
+    return {
+        **mismatch._asdict(),
+        "max_gap_error": f"{mismatch.max_gap_error:.3g}",
+        "wrong_by": f"{mismatch.wrong_by:.3g}",
+    }
+
+
+def run_methods(methods, check, *, repeats, slow_s, library, prepare_args=(), **fields):
+    """Every method on one scene: compiled, checked, then timed round-robin; one row each.
+
+    Args:
+      methods: name -> ``(fn, args)``, a peer's ``prepare`` (called with
+        ``prepare_args``, it returns them), or a string saying why that method
+        is not run (its row's note). A jitted ``fn`` is compiled ahead of the
+        runs (``compile_s``: tracing, lowering and compiling) and XLA's
+        account of the compiled program is kept: ``temp_mib`` (temporaries),
+        ``out_mib`` (outputs) and ``args_mib`` (arguments). A plain ``fn``
+        may carry the ``compile_s`` of its own preparation as an attribute.
+      check: ``result -> dict`` of row fields (the reference's counts and a
+        note) for the answer of the first call, which is also a warm-up.
+      repeats: timed rounds of each method (``add_timings``).
+      slow_s: a method whose first call took longer is timed by that call.
+      library: the method every ``ratio`` is against.
+      prepare_args: the arguments of every ``prepare`` in ``methods``.
+      **fields: what every row holds beside: ``scene``, ``nodes``,
+        ``segments``, ``dtype`` (left empty in the rows of methods not run).
+
+    Returns:
+      One row per method, in the order of ``methods``.
+    """
+    rows, timed, single = [], {}, {}
+    for name, method in methods.items():
+        entry = row(method=name, **fields)
+        if isinstance(method, str):
+            rows.append({**entry, "dtype": "", "note": method})
+            continue
+        fn, args = method(*prepare_args) if callable(method) else method
+        if hasattr(fn, "lower"):
+            call, compile_s = compiled_call(fn, args)
+            entry.update(memory_fields(call))
+        else:
+            call, compile_s = fn, getattr(fn, "compile_s", None)
+        began = time.perf_counter()
+        result = jax.block_until_ready(call(*args))
+        first_s = time.perf_counter() - began
+        entry.update(check(result))
+        time_or_note(entry, name, call, args, first_s, slow_s, timed, single)
+        entry["compile_s"] = "" if compile_s is None else round(compile_s, 3)
+        rows.append(entry)
+    return add_timings(rows, timed, single, repeats, library)
+
+
+def memory_fields(compiled) -> dict:
+    """XLA's account of a compiled program, in MiB: temporaries, outputs, arguments.
+
+    Temporaries plus outputs is what one call allocates beyond its
+    arguments (donated arguments aside): the program's own peak, as XLA
+    plans it. Empty fields where the backend gives no account.
+    """
+    memory = compiled.memory_analysis()
+    if memory is None:
+        return {}
+    return {
+        "temp_mib": round(memory.temp_size_in_bytes / 2**20, 3),
+        "out_mib": round(memory.output_size_in_bytes / 2**20, 3),
+        "args_mib": round(memory.argument_size_in_bytes / 2**20, 3),
+    }
 
 
 def time_or_note(entry, name, call, args, first_s, slow_s, timed, single) -> None:
@@ -128,8 +201,17 @@ def sized_crossing(sizes):
     return crossing
 
 
+def contact_of(result):
+    """A ``Search`` step's ``Contact`` (the first of its ``(Contact, state)``); else ``result``."""
+    if not hasattr(result, "found") and hasattr(result[0], "found"):
+        return result[0]
+    return result
+
+
 def answer_of(result):
-    """``(segment, gap, found)`` as NumPy arrays, from a ``Contact`` or a peer's tuple."""
+    """``(segment, gap, found)`` as NumPy arrays, from a ``Contact``, a ``Search`` step's
+    ``(Contact, state)`` or a peer's tuple."""
+    result = contact_of(result)
     if hasattr(result, "found"):
         return np.asarray(result.segment), np.asarray(result.gap), np.asarray(result.found)
     return tuple(np.asarray(part) for part in result[:3])
@@ -138,6 +220,14 @@ def answer_of(result):
 def check(result, x, start, end, reference) -> oracle.Mismatch:
     """The oracle's count of how ``result`` differs from ``reference``."""
     return oracle.compare(*answer_of(result), x, start, end, reference)
+
+
+def oracle_fields(result, x, start, end, reference) -> dict:
+    """The row fields of ``result`` checked against ``reference``: the oracle's counts, and a
+    note that says them in words (and says ``overflow`` where a ``Contact`` set it)."""
+    mismatch = check(result, x, start, end, reference)
+    overflow = "; overflow" if bool(getattr(contact_of(result), "overflow", False)) else ""
+    return {**mismatch_fields(mismatch), "note": oracle.describe(mismatch) + overflow}
 
 
 def endpoints(surface):
@@ -210,6 +300,17 @@ def pyplot(out: str):
     import matplotlib.pyplot as plt
 
     return plt
+
+
+def save_figure(figure, out: str, name: str) -> str:
+    """Lays ``figure`` out, writes it to ``<out>/<name>.png`` (120 dpi), closes it; the path."""
+    import matplotlib.pyplot as plt
+
+    figure.tight_layout()
+    path = os.path.join(out, f"{name}.png")
+    figure.savefig(path, dpi=120)
+    plt.close(figure)
+    return path
 
 
 def section(name, title, quick, note, body, pictures) -> str:

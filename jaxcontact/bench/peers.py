@@ -23,8 +23,6 @@ call only.
 from __future__ import annotations
 
 import functools
-import os
-import time
 
 import jax
 import numpy as np
@@ -32,7 +30,6 @@ import numpy as np
 from jaxcontact import all_to_all
 from jaxcontact._sizes import measure
 from jaxcontact.bench import _run, baselines, oracle
-from jaxcontact.bench.timing import compiled_call
 from jaxcontact.scenes import cutting_scene, rough_die_scene
 
 # The library's bucket sort, as timed here: fixed sizes, measured outside the timer.
@@ -108,28 +105,23 @@ def run_scene(kind, size, parameter, repeats, slow_s, quick=False) -> list[dict]
     reference = oracle.reference_contact(x, start, end, scene.radius)
     label = f"{kind}" + (f", M={parameter:,}" if kind == "rough die" else "")
     position = "" if kind == "rough die" else f"x_tip={parameter}"
-    rows, timed, single = [], {}, {}
-    for name, method in _methods(scene).items():
-        reason = _skip_reason(name, x, start, end, scene.radius, quick)
-        if reason:
-            rows.append(_run.row(label, len(x), len(start), name, position=position, note=reason))
-            continue
-        fn, args = method if isinstance(method, tuple) else method(x, start, end, scene.radius)
-        jitted = hasattr(fn, "lower")
-        call, compile_s = (
-            compiled_call(fn, args) if jitted else (fn, getattr(fn, "compile_s", None))
-        )
-        began = time.perf_counter()
-        result = jax.block_until_ready(call(*args))  # the answer checked, and a warm-up
-        first_s = time.perf_counter() - began
-        mismatch = _run.check(result, x, start, end, reference)
-        entry = _run.row(label, len(x), len(start), name, None, mismatch, position=position)
-        entry["dtype"] = str(x.dtype)
-        entry["note"] = oracle.describe(mismatch)
-        _run.time_or_note(entry, name, call, args, first_s, slow_s, timed, single)
-        entry["compile_s"] = "" if compile_s is None else round(compile_s, 3)
-        rows.append(entry)
-    return _run.add_timings(rows, timed, single, repeats, LIBRARY)
+    methods = {
+        name: _skip_reason(name, x, start, end, scene.radius, quick) or method
+        for name, method in _methods(scene).items()
+    }
+    return _run.run_methods(
+        methods,
+        lambda result: _run.oracle_fields(result, x, start, end, reference),
+        repeats=repeats,
+        slow_s=slow_s,
+        library=LIBRARY,
+        prepare_args=(x, start, end, scene.radius),
+        scene=label,
+        nodes=len(x),
+        segments=len(start),
+        position=position,
+        dtype=str(x.dtype),
+    )
 
 
 def ratios(rows) -> str:
@@ -165,11 +157,7 @@ def plot(rows, out) -> list[str]:
         axes.set(xscale="log", yscale="log", xlabel="slave nodes N", ylabel="median (ms)")
         axes.set_title(kind, fontsize=9)
         axes.legend(fontsize=6)
-    figure.tight_layout()
-    path = os.path.join(out, "peers.png")
-    figure.savefig(path, dpi=120)
-    plt.close(figure)
-    return [path]
+    return [_run.save_figure(figure, out, "peers")]
 
 
 def run(quick: bool, out: str, repeats: int | None = None, slow_s: float | None = None) -> str:

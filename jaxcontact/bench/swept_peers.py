@@ -21,7 +21,6 @@ by two segments), ``wrong_segment`` (another segment, met later) and
 from __future__ import annotations
 
 import functools
-import time
 
 import jax
 import jax.numpy as jnp
@@ -30,7 +29,6 @@ import numpy as np
 from jaxcontact import swept
 from jaxcontact._sizes import measure
 from jaxcontact.bench import _run, baselines, ipc, numba_grid
-from jaxcontact.bench.timing import compiled_call
 from jaxcontact.scenes import cutting_scene, paper_scene
 
 LIBRARY = "bucket_swept (sized)"
@@ -159,28 +157,28 @@ def run_scene(kind, size, parameters, repeats, slow_s) -> list[dict]:
     x_prev, x = np.asarray(scene.x_prev), np.asarray(scene.x)
     start, end = _run.endpoints(scene.surface)
     reference = reference_crossing(scene)
-    rows, timed, single = [], {}, {}
-    for name, method in _methods(scene).items():
-        entry = _run.row(kind, len(x), len(start), name, dtype=str(x.dtype))
-        reason = _skip_reason(name, len(x) * len(start))
-        if reason:
-            rows.append({**entry, "dtype": "", "note": reason})
-            continue
-        fn, args = method if isinstance(method, tuple) else method(x_prev, x, start, end)
-        jitted = hasattr(fn, "lower")
-        call, compile_s = (
-            compiled_call(fn, args) if jitted else (fn, getattr(fn, "compile_s", None))
-        )
-        began = time.perf_counter()
-        result = jax.block_until_ready(call(*args))  # the answer checked, and a warm-up
-        first_s = time.perf_counter() - began
+    methods = {
+        name: _skip_reason(name, len(x) * len(start)) or method
+        for name, method in _methods(scene).items()
+    }
+
+    def check(result):
         if hasattr(result, "crossed"):
             result = (result.segment, result.t, result.crossed)
-        entry.update(compare_crossing(result, reference, x_prev, x, start, end))
-        _run.time_or_note(entry, name, call, args, first_s, slow_s, timed, single)
-        entry["compile_s"] = "" if compile_s is None else round(compile_s, 3)
-        rows.append(entry)
-    return _run.add_timings(rows, timed, single, repeats, LIBRARY)
+        return compare_crossing(result, reference, x_prev, x, start, end)
+
+    return _run.run_methods(
+        methods,
+        check,
+        repeats=repeats,
+        slow_s=slow_s,
+        library=LIBRARY,
+        prepare_args=(x_prev, x, start, end),
+        scene=kind,
+        nodes=len(x),
+        segments=len(start),
+        dtype=str(x.dtype),
+    )
 
 
 def run(quick: bool, out: str, repeats: int | None = None, slow_s: float | None = None) -> str:

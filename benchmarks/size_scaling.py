@@ -1,0 +1,363 @@
+"""Run time, memory and compile time against problem size, on the rough die (issue 15).
+
+The rough-die scene (docs/scenes.md: the die ``y = 0.1 sin(2 pi x)`` cut into
+M equal steps over ``[0, 20]``, a grid of N slaves over ``[0, 20] x [-0.25,
+0.25]``, radius 0.02), float32, in two sweeps that meet at (10^5, 10^4):
+
+- against N: N = 10^3, 3 10^3, 10^4, ..., 10^6 slaves at M = 10^4 segments;
+- against M: M = 10^2, 3 10^2, 10^3, ..., 10^5 segments at N = 10^5 slaves.
+
+N is the grid's own count for the target (``nx * ny``, within a few per cent
+of it); every slope uses the counts the scenes have. On each scene, in one
+process, each method is compiled, its first answer checked, then all are
+timed round-robin (``jaxcontact.bench._run.run_methods``, as ``peers.py``:
+median and 10th-90th percentile, every call ended by ``block_until_ready``;
+20 rounds up to 10^5 slaves, 5 above):
+
+- ``bucket_sort (sized)``: the bucket sort with its ``Sizes`` measured once
+  outside the timer (``jaxcontact._sizes.measure``) and its whole search,
+  broad phase included, inside (``_run.sized_contact``);
+- ``Search.closest (reused state)``: ``Search(radius=0.02, skin=0.01)``
+  allocated at ``x`` and called on that same ``x``, so the skin rule holds
+  and the candidates are kept; the state goes in and out of the jitted step,
+  as in a simulation (``benchmarks/search_step.py``'s (b));
+- ``all_to_all``: only where ``N * M <= 2 10^8`` pairs (10 ns a pair on one
+  core of this project's machine: 2 s a call at most); elsewhere its row
+  says "not run";
+- ``numba grid (1 thread)``: the hand-written grid of
+  ``jaxcontact.bench.numba_grid``, the fastest CPU peer of ``peers.py``
+  (cell edge half the median segment length plus the radius, rebuilt every
+  call), when numba imports.
+
+What is measured, and why:
+
+- **time**, and its **slope**: the least-squares slope of log(median)
+  against log N (or log M) over every point of the sweep, and over its last
+  decade (the points within a factor 10 of the largest), where the fixed
+  costs weigh least and the algorithm's order shows: 1 for ``all_to_all`` in
+  N and in M; for a grid, 1 in N, and in M 0 while the slaves' work
+  dominates, rising to 1 once the cells, which cannot shrink below the
+  radius, hold more segments in proportion to M.
+- **memory**: XLA's own account of each compiled program
+  (``compiled.memory_analysis()``): temporaries plus outputs, what one call
+  allocates beyond its arguments (``_run.memory_fields``). The Search
+  step's state is an argument and an output. The numba grid is not an XLA
+  program: it has no figure here.
+- **compile time**: tracing, lowering and compiling each jitted program
+  (``jax.jit(f).lower(...).compile()``), which happens once per shape and
+  method: a new N, M or set of ``Sizes`` is a new program. Issue 15's target
+  is at most 1 s per shape. numba compiles once per dtype, on the first
+  scene (0 afterwards).
+- **check**: each answer against the float64 oracle
+  (``jaxcontact.bench.oracle``) of the same float32 numbers; ``ties`` are
+  the library's concave-corner rule at the die's troughs, not errors.
+
+Nothing is capped: the full run takes 4 to 7 minutes on this project's 2
+cores, depending on what else runs (its own time is in the section's first
+line). Unpinned, a method's time depends on
+whether XLA gets the second core, which other load on a 2-core machine
+decides; run it pinned too (``python benchmarks/results.py --pinned
+--sections size_scaling``) for slopes that show the algorithm.
+
+    python benchmarks/size_scaling.py --out benchmarks/results   # size_scaling.{md,csv,png}
+    python benchmarks/size_scaling.py --quick --out /tmp/scaling  # N <= 10^4: a smoke test
+"""
+
+from __future__ import annotations
+
+import functools
+import sys
+import time
+from typing import NamedTuple
+
+import jax
+import numpy as np
+
+from jaxcontact import Search, all_to_all
+from jaxcontact._sizes import measure
+from jaxcontact.bench import _run, baselines, oracle
+from jaxcontact.scenes import rough_die_scene
+
+LIBRARY = "bucket_sort (sized)"
+SEARCH = "Search.closest (reused state)"
+DENSE = "all_to_all"
+NUMBA = "numba grid (1 thread)"
+METHODS = (LIBRARY, SEARCH, DENSE, NUMBA)
+SKIN = 0.01  # benchmarks/search_step.py's skin on the rough die: half the radius
+PAIR_BUDGET = 2e8  # all_to_all's slave-segment pairs per call, at most
+TARGET_COMPILE_S = 1.0  # issue 15: compile time per shape
+
+
+class Sweeps(NamedTuple):
+    """The two sweeps: N at a fixed M, and M at a fixed N (targets: scene arguments)."""
+
+    nodes: tuple  # N of the sweep against N
+    nodes_at: int  # ... at this M
+    segments: tuple  # M of the sweep against M
+    segments_at: int  # ... at this N
+
+    def against_nodes(self) -> list[tuple[int, int]]:
+        return [(n, self.nodes_at) for n in self.nodes]
+
+    def against_segments(self) -> list[tuple[int, int]]:
+        return [(self.segments_at, m) for m in self.segments]
+
+    def scenes(self) -> list[tuple[int, int]]:
+        """Every ``(N, M)`` of either sweep, once: a scene both share is run once."""
+        return list(dict.fromkeys(self.against_nodes() + self.against_segments()))
+
+
+def _half_decades(low: int, high: int) -> tuple:
+    """``low, 3 low, 10 low, ...`` up to ``high``: 1 and 3 in each decade."""
+    sizes = []
+    while low <= high:
+        sizes += [low, 3 * low] if 3 * low <= high else [low]
+        low *= 10
+    return tuple(sizes)
+
+
+FULL = Sweeps(_half_decades(10**3, 10**6), 10**4, _half_decades(10**2, 10**5), 10**5)
+QUICK = Sweeps((10**3, 10**4), 10**3, (10**2, 10**3), 10**4)
+
+
+def methods(scene, names=METHODS) -> dict:
+    """name -> ``(fn, args)``, or why it is not run on ``scene``: the methods ``names`` lists."""
+    x, surface, radius = scene.x, scene.surface, scene.radius
+    pairs = x.shape[0] * surface.segments.shape[0]
+
+    def sized():
+        return _run.sized_contact(radius, measure(x, surface, radius=radius)), (x, surface)
+
+    def reused():
+        search = Search(radius=radius, skin=SKIN)
+        return jax.jit(search.closest), (search.allocate(x, surface), x, surface)
+
+    def dense():
+        if pairs > PAIR_BUDGET:
+            return f"not run: N*M too large ({pairs:.1e} pairs > {PAIR_BUDGET:.0e})"
+        return jax.jit(functools.partial(all_to_all, radius=radius)), (x, surface)
+
+    def numba():
+        start, end = _run.endpoints(surface)
+        prepare = baselines.PEERS[NUMBA][1]
+        return baselines.unavailable(NUMBA) or prepare(np.asarray(x), start, end, radius)
+
+    built = {LIBRARY: sized, SEARCH: reused, DENSE: dense, NUMBA: numba}
+    return {name: built[name]() for name in names}
+
+
+def run_scene(num_nodes, num_segments, repeats, slow_s, names=METHODS) -> list[dict]:
+    """The methods ``names`` lists (``LIBRARY`` among them) on one rough die; one row each."""
+    scene = rough_die_scene(num_nodes, num_segments)
+    x = np.asarray(scene.x)
+    start, end = _run.endpoints(scene.surface)
+    reference = oracle.reference_contact(x, start, end, scene.radius)
+
+    def check(result):
+        fields = _run.oracle_fields(result, x, start, end, reference)
+        state = result[-1]
+        if hasattr(state, "rebuilds"):  # the Search step's state: were the candidates kept?
+            fields["note"] += f"; candidates found again {int(state.rebuilds)} times"
+        return fields
+
+    return _run.run_methods(
+        methods(scene, names),
+        check,
+        repeats=repeats,
+        slow_s=slow_s,
+        library=LIBRARY,
+        scene="rough die",
+        nodes=len(x),
+        segments=len(start),
+        dtype=str(x.dtype),
+    )
+
+
+def slope(sizes, times) -> float | None:
+    """Least-squares slope of log ``times`` against log ``sizes`` (None below two points).
+
+    Example:
+      >>> round(slope([10, 100, 1000], [2.0, 20.0, 200.0]), 6)
+      1.0
+    """
+    if len(sizes) < 2:
+        return None
+    return float(np.polyfit(np.log(sizes), np.log(times), 1)[0])
+
+
+def time_ms(row) -> float | None:
+    """A row's median time in ms; None where the method was not run."""
+    return None if row["median_ms"] == "" else row["median_ms"]
+
+
+def memory_mib(row) -> float | None:
+    """A row's XLA temporaries + outputs in MiB; None where there is no XLA program."""
+    return None if row["temp_mib"] == "" else row["temp_mib"] + row["out_mib"]
+
+
+def points(rows, method, axis: str, value=time_ms) -> tuple[list, list]:
+    """``(sizes, values)`` of ``method``'s rows that have a ``value``; ``axis``: ``"nodes"``
+    or ``"segments"``."""
+    found = [(r[axis], value(r)) for r in rows if r["method"] == method]
+    found = [(size, number) for size, number in found if number is not None]
+    return [size for size, _ in found], [number for _, number in found]
+
+
+def slopes(rows, method, axis: str, value=time_ms) -> tuple[float | None, float | None]:
+    """``method``'s slope over every point of a sweep, and over its last decade."""
+    sizes, values = points(rows, method, axis, value)
+    top = [i for i, size in enumerate(sizes) if size * 10 >= max(sizes)]
+    last = slope([sizes[i] for i in top], [values[i] for i in top])
+    return slope(sizes, values), last
+
+
+def _fixed(value: float | None) -> str:
+    return "—" if value is None else f"{round(value, 2) + 0.0:.2f}"  # + 0.0: no "-0.00"
+
+
+def slope_table(against_n, against_m, names) -> list[str]:
+    """One row per method: its time's slopes in N and in M, over all points and the last
+    decade, and its memory's slope in N over the last decade."""
+    lines = [
+        "| method | time in N: all points | last decade | time in M: all points "
+        "| last decade | points (N, M) | memory in N: last decade |",
+        "|---|---:|---:|---:|---:|---:|---:|",
+    ]
+    for name in names:
+        in_n, in_m = slopes(against_n, name, "nodes"), slopes(against_m, name, "segments")
+        count = f"{len(points(against_n, name, 'nodes')[0])}, "
+        count += f"{len(points(against_m, name, 'segments')[0])}"
+        cells = " | ".join(_fixed(value) for value in (*in_n, *in_m))
+        held = _fixed(slopes(against_n, name, "nodes", memory_mib)[1])
+        lines.append(f"| {name} | {cells} | {count} | {held} |")
+    return lines
+
+
+def _memory(entry) -> str:
+    if memory_mib(entry) is None:
+        return "—"
+    return f"{memory_mib(entry):.3g} ({entry['temp_mib']:.3g} + {entry['out_mib']:.3g})"
+
+
+def _compile(entry) -> str:
+    if entry["compile_s"] == "":
+        return "—"
+    # numba compiles once per dtype, not per shape: the target is about XLA's programs.
+    over = entry["method"] != NUMBA and entry["compile_s"] > TARGET_COMPILE_S
+    over = f" **> {TARGET_COMPILE_S:g} s**" if over else ""
+    return f"{entry['compile_s']:.2f}{over}"
+
+
+def _median(entry) -> str:
+    return "not run" if entry["median_ms"] == "" else f"{entry['median_ms']:.3g}"
+
+
+def scene_table(scene_rows, names, value) -> list[str]:
+    """One row per scene (``N``, ``M``), one column per method, each cell ``value(row)``."""
+    lines = ["| N | M | " + " | ".join(names) + " |", "|---:|---:|" + "---:|" * len(names)]
+    for rows in scene_rows:
+        by_method = {r["method"]: r for r in rows}
+        cells = [value(by_method[name]) if name in by_method else "—" for name in names]
+        lines.append(f"| {rows[0]['nodes']:,} | {rows[0]['segments']:,} | {' | '.join(cells)} |")
+    return lines
+
+
+def plot(against_n, against_m, names, out) -> list[str]:
+    """Time against N, time against M and memory against N, log-log, one line per method."""
+    plt = _run.pyplot(out)
+    if plt is None:
+        return []
+    figure, (by_n, by_m, memory) = plt.subplots(1, 3, figsize=(15, 4.5))
+    for name in names:
+        for axes, rows, axis in ((by_n, against_n, "nodes"), (by_m, against_m, "segments")):
+            sizes, times = points(rows, name, axis)
+            if sizes:
+                fitted = _fixed(slope(sizes, times))
+                axes.plot(sizes, times, marker="o", ms=3, label=f"{name} (slope {fitted})")
+        sizes, held = points(against_n, name, "nodes", memory_mib)
+        if sizes:
+            memory.plot(sizes, held, marker="o", ms=3, label=name)
+    at_m, at_n = against_n[0]["segments"], against_m[0]["nodes"]
+    by_n.set(xlabel="slave nodes N", ylabel="median (ms)", title=f"time against N, M = {at_m:,}")
+    by_m.set(xlabel="segments M", ylabel="median (ms)", title=f"time against M, N = {at_n:,}")
+    memory.set(
+        xlabel="slave nodes N",
+        ylabel="XLA temporaries + outputs (MiB)",
+        title=f"memory against N, M = {at_m:,}",
+    )
+    for axes in (by_n, by_m, memory):
+        axes.set(xscale="log", yscale="log")
+    for axes in (by_n, by_m):
+        # A slope-1 guide through the middle of what is drawn, to read the slopes by eye.
+        (low, high), (bottom, top) = axes.get_xlim(), axes.get_ylim()
+        middle = np.sqrt(bottom * top / (low * high))
+        axes.plot([low, high], [low * middle, high * middle], ":", color="grey", label="slope 1")
+        axes.set_xlim(low, high)
+    for axes in (by_n, by_m, memory):
+        axes.grid(True, which="both", alpha=0.3)
+        axes.legend(fontsize=7)
+    return [_run.save_figure(figure, out, "size_scaling")]
+
+
+def report(by_scene, sweeps, names, out, quick, elapsed_s) -> str:
+    """The section's markdown (and its figure in ``out``), from ``(N, M) -> rows``."""
+    against_n = [row for key in sweeps.against_nodes() for row in by_scene[key]]
+    against_m = [row for key in sweeps.against_segments() for row in by_scene[key]]
+    rows = [row for scene_rows in by_scene.values() for row in scene_rows]
+    pictures = plot(against_n, against_m, names, out)
+    at_m, at_n = sweeps.nodes_at, sweeps.segments_at
+    columns = ("nodes", "segments", "method", "compile_s", "temp_mib", "out_mib", "args_mib")
+    more = ("median_ms", "p10_ms", "p90_ms", "runs", "ratio", "max_gap_error", "note")
+    body = [
+        "Slope of log(median time) against log N (M = "
+        f"{at_m:,}) and against log M (N = {at_n:,}), least squares over every point run and "
+        "over the last decade of each sweep (points within a factor 10 of its largest); and "
+        "of log(XLA temporaries + outputs) against log N over its last decade:",
+        "",
+        *slope_table(against_n, against_m, names),
+        "",
+        "Median time (ms):",
+        "",
+        *scene_table([by_scene[key] for key in by_scene], names, _median),
+        "",
+        f"Memory against N (M = {at_m:,}), from `compiled.memory_analysis()`: XLA "
+        "temporaries + outputs in MiB, and the two apart in brackets:",
+        "",
+        *scene_table([by_scene[key] for key in sweeps.against_nodes()], names, _memory),
+        "",
+        f"Compile time per shape (s; trace, lower and compile; issue 15's target: at most "
+        f"{TARGET_COMPILE_S:g} s). numba compiles once per dtype, in the first scene:",
+        "",
+        *scene_table([by_scene[key] for key in by_scene], names, _compile),
+        "",
+        "Every row, checked against the float64 oracle:",
+        "",
+        _run.markdown(rows, (*columns, *more)),
+    ]
+    note = (
+        f"float32; medians of interleaved runs; ratio = median / {LIBRARY}'s; XLA memory in "
+        f"MiB; nothing capped; the whole run took {elapsed_s / 60:.1f} min."
+    )
+    text = _run.section("size_scaling", "Size scaling", quick, note, body, pictures)
+    _run.write(out, "size_scaling", rows, text)
+    return text
+
+
+def run(quick: bool, out: str, repeats: int | None = None, slow_s: float | None = None) -> str:
+    """Runs both sweeps, writes CSV, markdown and PNG into ``out``; returns the markdown."""
+    began = time.perf_counter()
+    sweeps = QUICK if quick else FULL
+    slow_s = slow_s or (3.0 if quick else 30.0)
+    by_scene = {}
+    for num_nodes, num_segments in _run.progress(sweeps.scenes(), "size scaling"):
+        count = repeats or (5 if quick else (20 if num_nodes <= 10**5 else 5))
+        by_scene[num_nodes, num_segments] = run_scene(num_nodes, num_segments, count, slow_s)
+    return report(by_scene, sweeps, METHODS, out, quick, time.perf_counter() - began)
+
+
+def main(argv=None) -> int:
+    return _run.main(run, __doc__.splitlines()[0], argv, slow=True)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
