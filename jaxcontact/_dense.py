@@ -56,7 +56,7 @@ def all_to_all(x: Array, surface: Surface, *, radius, mask: Array | None = None)
 
 
 def _search_all(kernel, rows, segments: Segments, slave_ok, assemble):
-    """``assemble(choice)`` for the segment of lowest ``kernel(*row, a, b)``
+    """``assemble(choice)`` for the segment of lowest ``kernel(*row, segment)``
     per row, over every segment.
 
     The search runs in a ``lax.cond`` (``_narrow.in_stages``), scene by

@@ -16,6 +16,7 @@ import jax.numpy as jnp
 
 from jaxcontact._broad import Box
 from jaxcontact._cells import CellLists, list_candidates, segment_in_slot
+from jaxcontact._geometry import Edge, edge
 from jaxcontact._inputs import Segments
 from jaxcontact._lowest import lowest_score
 from jaxcontact._sizes import Sizes
@@ -35,8 +36,11 @@ def search_all(pair_value, segments: Segments, num_rows: int, dtype) -> Array:
     """i32[S]: each row against every segment (``all_to_all``, ``swept``, and
     the bucket sort's kept slaves when there are few segments)."""
 
+    # Each segment's own share of the kernel, for all at once (``Edge``).
+    edges = edge(segments.start, segments.end)
+
     def score(k):
-        value = pair_value(segments.start[k], segments.end[k])
+        value = pair_value(jax.tree.map(lambda field: field[k], edges))
         value = jnp.where(segments.ok[k], value, jnp.inf)
         return value, jnp.broadcast_to(k, value.shape)
 
@@ -51,7 +55,9 @@ def _search_rows(pair_value, segments: Segments, listed: CellLists, capacity: in
     def score(slot):
         segment = segment_in_slot(listed, slot)
         index = jnp.maximum(segment, 0)
-        value = pair_value(segments.start[index], segments.end[index])
+        # Computed per row from the gathered ends: the same numbers as a
+        # dense search's, so both score a pair alike.
+        value = pair_value(edge(segments.start[index], segments.end[index]))
         # Reused lists may name a segment masked or degenerate since.
         listed_ok = (segment >= 0) & segments.ok[index]
         return jnp.where(listed_ok, value, jnp.inf), segment
@@ -71,7 +77,7 @@ def search_listed(kernel, rows, segments: Segments, listed: CellLists, sizes: Si
     """i32[S]: each kept slave against the segments of its cell, at most
     ``sizes.cell_capacity`` slots.
 
-    ``kernel(*row, a, b)`` scores a pair; ``rows`` are the kept slaves' f[S, ...]
+    ``kernel(*row, segment)`` scores a pair; ``rows`` are the kept slaves' f[S, ...]
     arrays. A row costs as many slots as the fullest list it is searched
     with. Kept blocks hold many slaves whose cells are empty (a block is kept
     when its box meets the master's), so above ``sizes.chunk_rows`` rows they are
@@ -122,7 +128,7 @@ def search_listed(kernel, rows, segments: Segments, listed: CellLists, sizes: Si
 def choose(queries: Queries, segments: Segments, boxes: Box, kernel, sizes: Sizes, listed=None):
     """i32[S] chosen segment of each kept slave, and whether the cells overflowed.
 
-    Pairs are scored by ``kernel(*row, a, b)`` over ``queries.rows``. Rows
+    Pairs are scored by ``kernel(*row, segment)`` over ``queries.rows``. Rows
     that are not ``ok`` may hold any choice; the caller masks them.
     ``listed`` reuses candidate lists found before (``Search``).
     """
@@ -137,14 +143,15 @@ def choose(queries: Queries, segments: Segments, boxes: Box, kernel, sizes: Size
 
 
 def vmapped(kernel, *rows):
-    """``pair_value(start, end)`` mapping ``kernel(*row, start, end)`` over rows.
+    """``pair_value(segment)`` mapping ``kernel(*row, segment)`` over rows.
 
-    ``start``/``end`` are f[2] for all rows or f[S, 2] per row.
+    ``segment`` is an ``Edge`` of one segment for all rows (f[2] ends) or
+    one per row (f[S, 2] ends).
     """
 
-    def pair_value(start, end):
-        axis = None if start.ndim == 1 else 0
-        return jax.vmap(kernel, in_axes=(0,) * len(rows) + (axis, axis))(*rows, start, end)
+    def pair_value(segment: Edge):
+        axis = None if segment.start.ndim == 1 else 0
+        return jax.vmap(kernel, in_axes=(0,) * len(rows) + (axis,))(*rows, segment)
 
     return pair_value
 

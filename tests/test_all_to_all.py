@@ -7,7 +7,7 @@ import pytest
 
 import jaxcontact
 from jaxcontact import Surface
-from jaxcontact._geometry import squared_distance
+from jaxcontact._geometry import edge, squared_distance
 from jaxcontact._lowest import lowest_score
 from jaxcontact.scenes import paper_scene
 from tests import helpers
@@ -79,14 +79,14 @@ def test_first_index_wins_a_tie_across_segment_blocks():
     scene = helpers.random_scene(7, 9, 5)
     doubled = np.concatenate([scene.segments, scene.segments])
     starts, ends = scene.nodes[doubled[:, 0]], scene.nodes[doubled[:, 1]]
-    pair_value = jax.vmap(squared_distance, in_axes=(0, None, None))
+    pair_value = jax.vmap(squared_distance, in_axes=(0, None))
 
     @jax.jit
     def lowest(x, starts, ends):
         def score(k):
-            return pair_value(x, starts[k], ends[k]), jnp.broadcast_to(k, x.shape[:1])
+            return pair_value(x, edge(starts[k], ends[k])), jnp.broadcast_to(k, x.shape[:1])
 
-        every = jax.vmap(pair_value, in_axes=(None, 0, 0))(x, starts, ends)
+        every = jax.vmap(pair_value, in_axes=(None, 0))(x, edge(starts, ends))
         choice = lowest_score(score, len(starts), len(x), x.dtype, unroll=4, block=4)
         return choice, every
 
