@@ -11,6 +11,7 @@ import pytest
 import jaxcontact
 from jaxcontact import Search, Surface
 from jaxcontact._sizes import measure
+from tests.helpers import X64
 
 # All of this file runs again with x64 off (tests/test_x64_off.py).
 pytestmark = pytest.mark.x64_off
@@ -350,6 +351,9 @@ def test_every_detector_takes_empty_inputs(empty, detector, transform):
         assert np.isfinite(np.asarray(value, np.float64)).all()
 
 
+# With x64 on, ``jax.enable_x64(False)`` would only imitate the mode (and
+# compile its 23 programs twice in CI); the x64-off pass runs it for real.
+@pytest.mark.skipif(X64, reason="runs in the x64-off pass (tests/test_x64_off.py)")
 def test_numpy_float64_inputs_with_x64_off_are_computed_in_float32():
     # With x64 off (JAX's default), NumPy float64 arrays, float64 radii and
     # int64 indices become float32 and int32: mixed with float32 arrays they
@@ -358,10 +362,7 @@ def test_numpy_float64_inputs_with_x64_off_are_computed_in_float32():
     # Regression: x (NumPy float64) became float32 but the nodes (NumPy
     # float64) were compared as float64, so a plain NumPy call raised "must
     # have the slaves' dtype float32; got ... float32".
-    # Fresh arrays: under jax.enable_x64(False) in a process with x64 on, JAX
-    # may reuse the float64 device copy of a NumPy array that a jitted
-    # function captured earlier (X, above). A process with x64 off from the
-    # start (tests/test_x64_off.py) has no such copy.
+    # Fresh arrays: a jitted function above may hold a device copy of X.
     double, nodes64, single = X.copy(), NODES.copy(), X.astype(np.float32)
     with jax.enable_x64(False):
         search = Search(radius=0.5)
