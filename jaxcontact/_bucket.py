@@ -39,7 +39,7 @@ from jaxcontact._padded import cut_rows, pad_scene
 from jaxcontact._placement import searched_whole
 from jaxcontact._sizes import CELLS_ABOVE, Sizes, measure
 from jaxcontact._types import Array, Contact, Crossing, Surface
-from jaxcontact._writeback import empty_contact, empty_crossing, scatter_blocks
+from jaxcontact._writeback import empty_contact, empty_crossing, write_blocks
 
 
 class Candidates(NamedTuple):
@@ -147,7 +147,7 @@ def _search_kept(queries: Queries, blocks: Blocks, segments: Segments, boxes, li
     template = jnp.zeros((how.num_rows, 2), queries.query.dtype)
 
     def write(part):
-        return scatter_blocks(
+        return write_blocks(
             part, blocks, how.empty(template, part.overflow), how.sizes.block_size
         )
 
