@@ -82,7 +82,11 @@ def stage_programs(sizes, num_rows):
         slave_ok = _inputs.rows_ok(x, None)
         segments = _inputs.resolve_segments(surface)
         boxes, blocks = broad_phase(x, x, slave_ok, segments, radius, block_size, capacity)
-        return slave_ok, segments, boxes, blocks
+        return segments, boxes, blocks
+
+    def kept(x, blocks):
+        (rows,), ok = kept_rows(blocks, None, x)
+        return rows, ok
 
     def cells(kept, ok, segments, boxes):
         return list_candidates(kept, ok, segments, boxes, sizes)[0]
@@ -99,7 +103,7 @@ def stage_programs(sizes, num_rows):
         empty = empty_contact(jnp.zeros((num_rows, 2), part.gap.dtype), part.overflow)
         return write_blocks(part, blocks, empty, block_size)
 
-    programs = {"broad": broad, "kept": kept_rows, "cells": cells, "search": search}
+    programs = {"broad": broad, "kept": kept, "cells": cells, "search": search}
     programs |= {"assemble": assemble, "write": write}
     return {name: jax.jit(fn) for name, fn in programs.items()}
 
@@ -109,8 +113,8 @@ def staged_calls(scene, sizes, whole):
     programs = stage_programs(sizes, scene.x.shape[0])
     radius = jnp.asarray(scene.radius, scene.x.dtype)
     calls = {"broad": (programs["broad"], (scene.x, scene.surface, radius))}
-    slave_ok, segments, boxes, blocks = programs["broad"](*calls["broad"][1])
-    calls["kept"] = (programs["kept"], (scene.x, slave_ok, blocks))
+    segments, boxes, blocks = programs["broad"](*calls["broad"][1])
+    calls["kept"] = (programs["kept"], (scene.x, blocks))
     kept, ok = programs["kept"](*calls["kept"][1])
     listed = None
     if sizes.use_cells:
@@ -207,9 +211,57 @@ def kernels(jitted, args) -> int:
     return count
 
 
+# The stage each library function belongs to, for attributing a thunk by its call stack.
+STAGE_OF = {
+    "rows_ok": "broad",
+    "resolve_segments": "broad",
+    "broad_phase": "broad",
+    "kept_rows": "kept",
+    "list_candidates": "cells",
+    "search_all": "search",
+    "search_listed": "search",
+    "contact_from_choice": "assemble",
+    "write_blocks": "write",
+    "empty_contact": "write",
+}
+
+
+def stage_of_instructions(text: str) -> dict:
+    """instruction name -> stage, from the innermost library function in its
+    call stack (the metadata of a compiled program's text)."""
+    tables = {}
+    for table in ("FunctionNames", "FileLocations", "StackFrames"):
+        block = re.search(rf"^{table}\n(.*?)\n\n", text, re.S | re.M)
+        tables[table] = dict(re.findall(r"^(\d+) (.*)$", block.group(1), re.M) if block else [])
+    functions = {key: value.strip('"') for key, value in tables["FunctionNames"].items()}
+    location = {
+        key: re.search(r"function_name_id=(\d+)", value).group(1)
+        for key, value in tables["FileLocations"].items()
+    }
+    frames = {
+        key: re.search(r"file_location_id=(\d+) parent_frame_id=(\d+)", value).groups()
+        for key, value in tables["StackFrames"].items()
+    }
+
+    def stage(frame):
+        while frame in frames:
+            place, parent = frames[frame]
+            name = functions.get(location.get(place, ""), "")
+            if name in STAGE_OF:
+                return STAGE_OF[name]
+            # The text names a frame's parent by its number plus one (0: none).
+            frame = str(int(parent) - 1)
+        return "other"
+
+    found = re.findall(r"^\s+(?:ROOT )?%(\S+) = .*?stack_frame_id=(\d+)", text, re.M)
+    return {name: stage(frame) for name, frame in found}
+
+
 def profile(jitted, args, out: str, repeats: int = 5) -> list[str]:
-    """The ten costliest thunks of ``jitted`` in a perfetto trace (microseconds per call)."""
+    """Thunk time of ``jitted`` per call, by stage and for the ten costliest
+    thunks, from a perfetto trace (microseconds, inflated by the tracing)."""
     call = jitted.lower(*args).compile()
+    stages = stage_of_instructions(call.as_text())
     jax.block_until_ready(call(*args))
     with jax.profiler.trace(out, create_perfetto_trace=True):
         for _ in range(repeats):
@@ -218,13 +270,19 @@ def profile(jitted, args, out: str, repeats: int = 5) -> list[str]:
     with gzip.open(path) as stream:
         events = json.load(stream)
     events = events["traceEvents"] if isinstance(events, dict) else events
-    spent = Counter()
+    spent, by_stage, runs = Counter(), Counter(), 0
     for event in events:
         name = event.get("name", "")
-        skip = ("$", "end:", "Thunk", "Threadpool", "Wait", "Pjit", "Common", "Python", "Handle")
-        if event.get("ph") == "X" and not name.startswith(skip):
+        # Branches and loops hold the thunks they run: count those only.
+        if event.get("ph") == "X" and name in stages and not name.startswith(("cond", "while")):
             spent[name] += event["dur"] / repeats
-    return [f"{us:10.1f} us  {name}" for name, us in spent.most_common(10)]
+            by_stage[stages[name]] += event["dur"] / repeats
+            runs += 1
+    lines = [f"{runs / repeats:.0f} thunks run per call; by stage:"]
+    lines += [f"{us:10.1f} us  {stage}" for stage, us in by_stage.most_common()]
+    lines.append("costliest thunks:")
+    lines += [f"{us:10.1f} us  {name} ({stages[name]})" for name, us in spent.most_common(10)]
+    return lines
 
 
 @functools.cache
@@ -310,7 +368,7 @@ def run_scene(key, repeats, revision=None, profile_dir=None) -> str:
         )
     lines.append(f"| sum of the stages | {stage_sum * 1e3:.3f} | | {stage_sum / base:.2f} | |")
     if profile_dir:
-        lines += ["", "Costliest thunks of the whole program (traced, so inflated):", "", "```"]
+        lines += ["", "The whole program's thunks, traced (inflated by the tracing):", "", "```"]
         lines += profile(whole, (scene.x, scene.surface), os.path.join(profile_dir, key))
         lines.append("```")
     return "\n".join(lines + [""])

@@ -34,7 +34,7 @@ def empty_crossing(x: Array, overflow: Array) -> Crossing:
 
 
 def write_blocks(result, blocks: Blocks, empty, block_size: int):
-    """Writes the kept blocks' results into the all-zero result ``empty``.
+    """Writes the kept blocks' results into ``empty``, N rows of nothing found (all alike).
 
     Every block of the N rows reads its kept slot's rows, or ``empty``'s
     where it was not kept: one gather of whole blocks, fused with the
@@ -47,7 +47,6 @@ def write_blocks(result, blocks: Blocks, empty, block_size: int):
     """
     num_rows = empty.segment.shape[0]
     num_blocks = -(-num_rows // block_size)
-    pad = num_blocks * block_size - num_rows
     capacity = blocks.index.shape[0]
     # Each block's slot in the kept buffer, -1 where it was not kept (empty
     # slots name block ``num_blocks`` and are dropped).
@@ -58,11 +57,14 @@ def write_blocks(result, blocks: Blocks, empty, block_size: int):
     def put(full, part):
         if full.ndim == 0:
             return part
+        if num_rows == 0:
+            return full
         tail = full.shape[1:]
         read = part.reshape((capacity, block_size) + tail)[jnp.maximum(slot, 0)]
-        padded = jnp.pad(full, ((0, pad),) + ((0, 0),) * len(tail))
-        by_block = padded.reshape((num_blocks, block_size) + tail)
-        chosen = jnp.where(kept.reshape((num_blocks,) + (1,) * (len(tail) + 1)), read, by_block)
+        # The rows of ``empty`` are all alike: its first fills the blocks not
+        # kept, a constant XLA fuses (a padded copy of ``empty`` was written out).
+        fill = full[:1].reshape((1, 1) + tail)
+        chosen = jnp.where(kept.reshape((num_blocks,) + (1,) * (len(tail) + 1)), read, fill)
         return chosen.reshape((num_blocks * block_size,) + tail)[:num_rows]
 
     return jax.tree.map(put, empty, result)
