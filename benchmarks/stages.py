@@ -50,12 +50,12 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxcontact import _inputs
+from jaxcontact import _bucket, _inputs
 from jaxcontact._assemble import contact_from_choice
 from jaxcontact._broad import broad_phase, kept_rows
 from jaxcontact._cells import list_candidates
 from jaxcontact._geometry import squared_distance
-from jaxcontact._narrow import search_all, search_listed, vmapped
+from jaxcontact._narrow import Queries, in_stages, search_all, search_listed, vmapped
 from jaxcontact._sizes import measure
 from jaxcontact._writeback import empty_contact, write_blocks
 from jaxcontact.bench import _run
@@ -106,6 +106,30 @@ def stage_programs(sizes, num_rows):
     programs = {"broad": broad, "kept": kept, "cells": cells, "search": search}
     programs |= {"assemble": assemble, "write": write}
     return {name: jax.jit(fn) for name, fn in programs.items()}
+
+
+def without_write_back(sizes):
+    """The whole program less its write-back: the kept slaves' ``Contact`` and
+    their rows (a compact result), with the whole program's stage borders."""
+
+    def contact(x, surface, radius):
+        slave_ok = _inputs.rows_ok(x, None)
+        segments = _inputs.resolve_segments(surface)
+        boxes, blocks = broad_phase(
+            x, x, slave_ok, segments, radius, sizes.block_size, sizes.block_capacity
+        )
+        (kept,), ok = kept_rows(blocks, None, x)
+        go = blocks.count > 0
+        queries = Queries((kept,), kept, ok)
+        choice = _bucket._choose_if(squared_distance, sizes, go, queries, segments, boxes, None)
+
+        def assemble(chosen):
+            return contact_from_choice(kept, segments, chosen[0], radius, chosen[1], ok)
+
+        empty = empty_contact(kept, jnp.zeros((), bool))
+        return in_stages(go, [assemble], [empty], choice), blocks.rows
+
+    return jax.jit(contact)
 
 
 def staged_calls(scene, sizes, whole):
@@ -162,7 +186,11 @@ def floor_calls(scene, whole):
             jnp.zeros((num_rows,), bool).at[rows].set(True),
         )
 
+    # The Contact's bytes per row: gap, xi, segment, point, normal, found, active.
+    row_bytes = 5 * x.dtype.itemsize + 4 + 2
+    buffer = np.empty(num_rows * row_bytes, np.uint8)
     return {
+        "floor: NumPy fill of the Contact's bytes": (lambda: buffer.fill(0), ()),
         "floor: dispatch": (jax.jit(dispatch), (gap[:1],)),
         "floor: read x once": (jax.jit(read), (x, low, high)),
         "floor: write Contact": (jax.jit(write_contact), (rows, gap, segment, point)),
@@ -337,6 +365,15 @@ def run_scene(key, repeats, revision=None, profile_dir=None) -> str:
         then = sized_then(scene, surface)
         same(then(scene.x, surface), expected, f"bucket_sort at {revision}")
         calls[f"bucket_sort (sized) at {revision}"] = (then, (scene.x, surface))
+    compact = without_write_back(sizes)
+    radius = jnp.asarray(scene.radius, scene.x.dtype)
+    calls["bucket_sort without write-back"] = (compact, (scene.x, scene.surface, radius))
+    part, rows = compact(scene.x, scene.surface, radius)
+    real = np.asarray(rows) < scene.x.shape[0]
+    for name in expected._fields[:-1]:
+        written = np.asarray(getattr(expected, name))[np.asarray(rows)[real]]
+        if not np.array_equal(written, np.asarray(getattr(part, name))[real]):
+            raise AssertionError(f"without write-back: field {name} differs")
     stages = staged_calls(scene, sizes, expected)
     calls |= {f"stage: {name}": call for name, call in stages.items()}
     calls |= floor_calls(scene, expected)
