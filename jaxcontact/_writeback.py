@@ -39,11 +39,15 @@ def write_blocks(result, blocks: Blocks, empty, block_size: int):
     Every block of the N rows reads its kept slot's rows, or ``empty``'s
     where it was not kept: one gather of whole blocks, fused with the
     choice and the cut to N rows, so each output row is written once.
-    Measured 1.4-1.8x faster on the CPU than a scatter of the blocks into
-    padded rows of zeros (zeros written, copied where XLA shares them
+    Measured 1.5-2x faster on the CPU (0.36 against 0.53-0.58 ms at 81,939
+    rows, 4.1-5.1 against 6.3-10 ms at 10^6) than a scatter of the blocks
+    into padded rows of zeros (zeros written, copied where XLA shares them
     between fields, scattered into, then cut to N rows: three writes of
-    every row); a scatter or gather of single rows was slower still (XLA
-    also fused it with the projection and recomputed it per field).
+    every row). Single rows measured slower than whole blocks: a gather (an
+    index per row) took 1.5x the old scatter's time at 81,939 rows, a
+    scatter 0.64x there and 1.0x at 10^6, where a gather of blocks took
+    0.56x and 0.73x; an earlier scatter of single rows was also fused by XLA
+    with the projection and recomputed per field.
     """
     num_rows = empty.segment.shape[0]
     num_blocks = -(-num_rows // block_size)
