@@ -63,6 +63,7 @@ SECTIONS = {
     "simulate": Section("Simulation", "simulate.py"),
     "row_counts": Section("Run time against the exact row count", "row_counts.py"),
     "emitters": Section("XLA's CPU code generators", "emitters.py"),
+    "stages": Section("Where the bucket sort's time goes", "stages.py"),
     "long_process": Section(
         "Long processes: memory maps",
         "long_process.py",

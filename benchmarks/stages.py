@@ -419,7 +419,8 @@ def main(argv=None) -> int:
     parser.add_argument("--against", help="git revision whose bucket sort is timed beside")
     parser.add_argument("--profile", help="folder for perfetto traces of the whole programs")
     args = parser.parse_args(argv)
-    print(f"`python benchmarks/stages.py`; {_run.machine()}; float32", flush=True)
+    command = " ".join(["python benchmarks/stages.py", *(sys.argv[1:] if argv is None else argv)])
+    print(f"`{command}`; {_run.machine()}; float32", flush=True)
     for key in args.scenes:
         print(run_scene(key, args.repeats, args.against, args.profile), flush=True)
     return 0
