@@ -3,6 +3,7 @@
     python benchmarks/stages.py                       # cutting 81,939 and 10^6, rough die 10^5
     python benchmarks/stages.py --scenes cutting-81939 --repeats 40
     python benchmarks/stages.py --against main        # and that revision's bucket sort beside
+    python benchmarks/stages.py --quick               # 10^4 nodes, a smoke test
     XLA_FLAGS=--xla_cpu_enable_xprof_traceme=true python benchmarks/stages.py --profile DIR
 
 On each scene (float32, ``docs/scenes.md``; the scenes of ``peers.py``) the
@@ -63,6 +64,7 @@ from jaxcontact.bench.peers import build
 from jaxcontact.bench.timing import time_interleaved
 
 SCENES = {
+    "cutting-10000": ("cutting, tool in (x_tip=18)", 10_000, 18.0),
     "cutting-81939": ("cutting, tool in (x_tip=18)", 81_939, 18.0),
     "cutting-1e6": ("cutting, tool in (x_tip=18)", 10**6, 18.0),
     "cutting-clear-81939": ("cutting, tool clear (x_tip=20.5)", 81_939, 20.5),
@@ -416,13 +418,17 @@ def main(argv=None) -> int:
     default = ["cutting-81939", "cutting-1e6", "die-1e5"]
     parser.add_argument("--scenes", nargs="+", choices=SCENES, default=default)
     parser.add_argument("--repeats", type=int, default=20, help="timed runs of each program")
+    parser.add_argument("--quick", action="store_true", help="small scenes, 5 runs: a smoke test")
     parser.add_argument("--against", help="git revision whose bucket sort is timed beside")
     parser.add_argument("--profile", help="folder for perfetto traces of the whole programs")
     args = parser.parse_args(argv)
     command = " ".join(["python benchmarks/stages.py", *(sys.argv[1:] if argv is None else argv)])
     print(f"`{command}`; {_run.machine()}; float32", flush=True)
-    for key in args.scenes:
-        print(run_scene(key, args.repeats, args.against, args.profile), flush=True)
+    scenes, repeats = args.scenes, args.repeats
+    if args.quick:
+        scenes, repeats = ["cutting-10000", "die-1e4"], 5
+    for key in scenes:
+        print(run_scene(key, repeats, args.against, args.profile), flush=True)
     return 0
 
 
