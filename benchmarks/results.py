@@ -69,6 +69,7 @@ SECTIONS = {
         ("--out", "{out}"),
         "{out}/size_scaling.md",
     ),
+    "stages": Section("Where the bucket sort's time goes", "stages.py"),
     "long_process": Section(
         "Long processes: memory maps",
         "long_process.py",

@@ -3,8 +3,8 @@
 The paper's bucket-sort strategy in fixed-size arrays. Three stages:
 
 1. Preliminary phase (``_broad``): the master's box, inflated by the search
-   distance, against boxes of blocks of slaves; the blocks that meet it go
-   into a buffer of measured capacity. If none meets it the rest is skipped
+   distance, against the slaves; the blocks of slaves with a row that meets
+   it go into a buffer of measured capacity. If none meets it the rest is skipped
    with ``lax.cond`` s (under ``vmap`` the search still skips, scene by
    scene on the CPU; the other stages run both branches, which stays right).
 2. Narrow phase (``_narrow``) on the kept slaves: with few segments, each
@@ -39,7 +39,7 @@ from jaxcontact._padded import cut_rows, pad_scene
 from jaxcontact._placement import searched_whole
 from jaxcontact._sizes import CELLS_ABOVE, Sizes, measure
 from jaxcontact._types import Array, Contact, Crossing, Surface
-from jaxcontact._writeback import empty_contact, empty_crossing, scatter_blocks
+from jaxcontact._writeback import empty_contact, empty_crossing, write_blocks
 
 
 class Candidates(NamedTuple):
@@ -66,7 +66,7 @@ def find(x, surface: Surface, reach, mask, sizes: Sizes) -> Candidates:
     )
     listed, overflow = None, blocks.overflow
     if sizes.use_cells:
-        kept, ok = kept_rows(x, slave_ok, blocks)
+        (kept,), ok = kept_rows(blocks, mask, x)
         listed, cells_overflow = list_candidates(kept, ok, segments, boxes, sizes)
         # Cells no kept slave looks up cannot lose a candidate.
         overflow = overflow | (cells_overflow & (blocks.count > 0))
@@ -147,9 +147,7 @@ def _search_kept(queries: Queries, blocks: Blocks, segments: Segments, boxes, li
     template = jnp.zeros((how.num_rows, 2), queries.query.dtype)
 
     def write(part):
-        return scatter_blocks(
-            part, blocks, how.empty(template, part.overflow), how.sizes.block_size
-        )
+        return write_blocks(part, blocks, how.empty(template, part.overflow), how.sizes.block_size)
 
     return in_stages(
         go,
@@ -161,13 +159,13 @@ def _search_kept(queries: Queries, blocks: Blocks, segments: Segments, boxes, li
 
 @searched_whole(rows="x")
 def _contact(x, surface, radius, mask, sizes: Sizes, candidates: Candidates | None = None):
-    # Bad rows are left in ``x``: the box reductions skip them, and the kept
-    # rows are zeroed when gathered, so no pass over all N rows copies x.
-    slave_ok = _inputs.rows_ok(x, mask)
+    # Bad rows are left in ``x``: the broad phase's test skips them, and the
+    # kept rows are zeroed when gathered, so no pass over all N rows copies x.
     segments = _inputs.resolve_segments(surface)
     if x.shape[0] == 0 or segments.ok.shape[0] == 0:
         return empty_contact(x, jnp.zeros((), bool))
     if candidates is None:
+        slave_ok = _inputs.rows_ok(x, mask)
         boxes, blocks = broad_phase(
             x, x, slave_ok, segments, radius, sizes.block_size, sizes.block_capacity
         )
@@ -175,7 +173,7 @@ def _contact(x, surface, radius, mask, sizes: Sizes, candidates: Candidates | No
     else:
         boxes, blocks, listed = None, candidates.blocks, candidates.listed
         overflow = candidates.overflow
-    kept, ok = kept_rows(x, slave_ok, blocks)
+    (kept,), ok = kept_rows(blocks, mask, x)
 
     def assemble(choice, cells_overflow):
         return contact_from_choice(kept, segments, choice, radius, cells_overflow, ok)
@@ -197,8 +195,7 @@ def _crossing(x_prev, x, surface, mask, sizes: Sizes):
     _, blocks = broad_phase(
         path_low, path_high, slave_ok, segments, no_reach, sizes.block_size, sizes.block_capacity
     )
-    start, ok = kept_rows(x_prev, slave_ok, blocks)
-    end, _ = kept_rows(x, slave_ok, blocks)
+    (start, end), ok = kept_rows(blocks, mask, x_prev, x)
     # Where a path meets a segment, its start lies within the path's length
     # of that segment: bin the segments inflated by the longest kept path and
     # look up each path's start (the paper's boxes inflated by d_max).

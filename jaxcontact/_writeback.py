@@ -33,24 +33,42 @@ def empty_crossing(x: Array, overflow: Array) -> Crossing:
     )
 
 
-def scatter_blocks(result, blocks: Blocks, empty, block_size: int):
-    """Writes the kept blocks' results into the all-zero result ``empty``.
+def write_blocks(result, blocks: Blocks, empty, block_size: int):
+    """Writes the kept blocks' results into ``empty``, N rows of nothing found (all alike).
 
-    Whole blocks are written (a scatter of C slices of ``block_size`` rows):
-    measured 8x cheaper than a scatter of single rows, which XLA also fused
+    Every block of the N rows reads its kept slot's rows, or ``empty``'s
+    where it was not kept: one gather of whole blocks, fused with the
+    choice and the cut to N rows, so each output row is written once.
+    Measured 1.5-2x faster on the CPU (0.36 against 0.53-0.58 ms at 81,939
+    rows, 4.1-5.1 against 6.3-10 ms at 10^6) than a scatter of the blocks
+    into padded rows of zeros (zeros written, copied where XLA shares them
+    between fields, scattered into, then cut to N rows: three writes of
+    every row). Single rows measured slower than whole blocks: a gather (an
+    index per row) took 1.5x the old scatter's time at 81,939 rows, a
+    scatter 0.64x there and 1.0x at 10^6, where a gather of blocks took
+    0.56x and 0.73x; an earlier scatter of single rows was also fused by XLA
     with the projection and recomputed per field.
     """
     num_rows = empty.segment.shape[0]
     num_blocks = -(-num_rows // block_size)
-    pad = num_blocks * block_size - num_rows
+    capacity = blocks.index.shape[0]
+    # Each block's slot in the kept buffer, -1 where it was not kept (empty
+    # slots name block ``num_blocks`` and are dropped).
+    slot = jnp.full((num_blocks,), -1, jnp.int32)
+    slot = slot.at[blocks.index].set(jnp.arange(capacity, dtype=jnp.int32), mode="drop")
+    kept = slot >= 0
 
     def put(full, part):
         if full.ndim == 0:
             return part
+        if num_rows == 0:
+            return full
         tail = full.shape[1:]
-        padded = jnp.pad(full, ((0, pad),) + ((0, 0),) * len(tail))
-        by_block = padded.reshape((num_blocks, block_size) + tail)
-        by_block = by_block.at[blocks.index].set(part.reshape((-1, block_size) + tail), mode="drop")
-        return by_block.reshape((num_blocks * block_size,) + tail)[:num_rows]
+        read = part.reshape((capacity, block_size) + tail)[jnp.maximum(slot, 0)]
+        # The rows of ``empty`` are all alike: its first fills the blocks not
+        # kept, a constant XLA fuses (a padded copy of ``empty`` was written out).
+        fill = full[:1].reshape((1, 1) + tail)
+        chosen = jnp.where(kept.reshape((num_blocks,) + (1,) * (len(tail) + 1)), read, fill)
+        return chosen.reshape((num_blocks * block_size,) + tail)[:num_rows]
 
     return jax.tree.map(put, empty, result)

@@ -1,0 +1,436 @@
+"""Where the sized bucket sort's time goes: each stage timed apart, beside the floors.
+
+    python benchmarks/stages.py                       # cutting 81,939 and 10^6, rough die 10^5
+    python benchmarks/stages.py --scenes cutting-81939 --repeats 40
+    python benchmarks/stages.py --against main        # and that revision's bucket sort beside
+    python benchmarks/stages.py --quick               # 10^4 nodes, a smoke test
+    XLA_FLAGS=--xla_cpu_enable_xprof_traceme=true python benchmarks/stages.py --profile DIR
+
+On each scene (float32, ``docs/scenes.md``; the scenes of ``peers.py``) the
+closest-point bucket sort with measured ``Sizes`` ("bucket_sort (sized)" of
+``peers.py``) is cut into its stages, each its own jitted function run on
+the real output of the stage before:
+
+- broad: finite rows, resolved segments, the master's box, the kept blocks;
+- kept: the kept slaves gathered;
+- cells (many segments only): segments binned, each kept slave's list;
+- search: the chosen segment of each kept slave;
+- assemble: the ``Contact`` of the kept slaves (the tie rule included);
+- write: their rows written into N rows of nothing found.
+
+Their sum is not the whole program's time (a stage apart pays a dispatch and
+loses fusion across its borders) but shows the split. Beside them, in the
+same round-robin: the whole program, the floors (an empty jitted call; one
+vectorised pass over ``x``; a ``Contact`` of N rows of zeros with the found
+rows scattered in, and the three fields the numba grid returns) and the
+numba grid on one thread. Every stage's result is checked bit for bit
+against the whole program's. ``kernels`` counts the thunks XLA's CPU
+runtime runs per call of each program (fusions and other non-trivial
+instructions, each while body once); ``--profile DIR`` also writes a
+perfetto trace of the whole program and prints its ten costliest thunks
+(run with the traceme flag above: without it the trace holds no thunks).
+``--against REV`` times that git revision's bucket sort beside this one
+(the package extracted under another name), checked bit for bit.
+"""
+
+from __future__ import annotations
+
+import argparse
+import functools
+import glob
+import gzip
+import json
+import os
+import re
+import subprocess
+import sys
+import tempfile
+from collections import Counter
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxcontact import _bucket, _inputs
+from jaxcontact._assemble import contact_from_choice
+from jaxcontact._broad import broad_phase, kept_rows
+from jaxcontact._cells import list_candidates
+from jaxcontact._geometry import squared_distance
+from jaxcontact._narrow import Queries, in_stages, search_all, search_listed, vmapped
+from jaxcontact._sizes import measure
+from jaxcontact._writeback import empty_contact, write_blocks
+from jaxcontact.bench import _run
+from jaxcontact.bench.peers import build
+from jaxcontact.bench.timing import time_interleaved
+
+SCENES = {
+    "cutting-10000": ("cutting, tool in (x_tip=18)", 10_000, 18.0),
+    "cutting-81939": ("cutting, tool in (x_tip=18)", 81_939, 18.0),
+    "cutting-1e6": ("cutting, tool in (x_tip=18)", 10**6, 18.0),
+    "cutting-clear-81939": ("cutting, tool clear (x_tip=20.5)", 81_939, 20.5),
+    "die-1e4": ("rough die", 10**4, 10**3),
+    "die-1e5": ("rough die", 10**5, 10**4),
+    "die-1e6": ("rough die", 10**6, 10**5),
+}
+# Instructions that run no kernel of their own.
+_FREE = {"parameter", "constant", "get-tuple-element", "tuple", "bitcast", "opt-barrier"}
+
+
+def stage_programs(sizes, num_rows):
+    """name -> jitted stage: the sized closest-point bucket sort cut where its data is small."""
+    block_size, capacity = sizes.block_size, sizes.block_capacity
+
+    def broad(x, surface, radius):
+        slave_ok = _inputs.rows_ok(x, None)
+        segments = _inputs.resolve_segments(surface)
+        boxes, blocks = broad_phase(x, x, slave_ok, segments, radius, block_size, capacity)
+        return segments, boxes, blocks
+
+    def kept(x, blocks):
+        (rows,), ok = kept_rows(blocks, None, x)
+        return rows, ok
+
+    def cells(kept, ok, segments, boxes):
+        return list_candidates(kept, ok, segments, boxes, sizes)[0]
+
+    def search(kept, segments, listed):
+        if sizes.use_cells:
+            return search_listed(squared_distance, (kept,), segments, listed, sizes)
+        return search_all(vmapped(squared_distance, kept), segments, kept.shape[0], kept.dtype)
+
+    def assemble(kept, segments, choice, radius, ok):
+        return contact_from_choice(kept, segments, choice, radius, jnp.zeros((), bool), ok)
+
+    def write(part, blocks):
+        empty = empty_contact(jnp.zeros((num_rows, 2), part.gap.dtype), part.overflow)
+        return write_blocks(part, blocks, empty, block_size)
+
+    programs = {"broad": broad, "kept": kept, "cells": cells, "search": search}
+    programs |= {"assemble": assemble, "write": write}
+    return {name: jax.jit(fn) for name, fn in programs.items()}
+
+
+def without_write_back(sizes):
+    """The whole program less its write-back: the kept slaves' ``Contact`` and
+    their rows (a compact result), with the whole program's stage borders."""
+
+    def contact(x, surface, radius):
+        slave_ok = _inputs.rows_ok(x, None)
+        segments = _inputs.resolve_segments(surface)
+        boxes, blocks = broad_phase(
+            x, x, slave_ok, segments, radius, sizes.block_size, sizes.block_capacity
+        )
+        (kept,), ok = kept_rows(blocks, None, x)
+        go = blocks.count > 0
+        queries = Queries((kept,), kept, ok)
+        choice = _bucket._choose_if(squared_distance, sizes, go, queries, segments, boxes, None)
+
+        def assemble(chosen):
+            return contact_from_choice(kept, segments, chosen[0], radius, chosen[1], ok)
+
+        empty = empty_contact(kept, jnp.zeros((), bool))
+        return in_stages(go, [assemble], [empty], choice), blocks.rows
+
+    return jax.jit(contact)
+
+
+def staged_calls(scene, sizes, whole):
+    """name -> (jitted, args) of every stage on the real inputs, checked against ``whole``."""
+    programs = stage_programs(sizes, scene.x.shape[0])
+    radius = jnp.asarray(scene.radius, scene.x.dtype)
+    calls = {"broad": (programs["broad"], (scene.x, scene.surface, radius))}
+    segments, boxes, blocks = programs["broad"](*calls["broad"][1])
+    calls["kept"] = (programs["kept"], (scene.x, blocks))
+    kept, ok = programs["kept"](*calls["kept"][1])
+    listed = None
+    if sizes.use_cells:
+        calls["cells"] = (programs["cells"], (kept, ok, segments, boxes))
+        listed = programs["cells"](*calls["cells"][1])
+    calls["search"] = (programs["search"], (kept, segments, listed))
+    choice = programs["search"](*calls["search"][1])
+    calls["assemble"] = (programs["assemble"], (kept, segments, choice, radius, ok))
+    part = programs["assemble"](*calls["assemble"][1])
+    calls["write"] = (programs["write"], (part, blocks))
+    same(programs["write"](*calls["write"][1]), whole, "the stages")
+    return calls
+
+
+def floor_calls(scene, whole):
+    """name -> (jitted, args): what any answer costs at least, on this machine."""
+    num_rows, x = scene.x.shape[0], scene.x
+    found = np.flatnonzero(np.asarray(whole.found)).astype(np.int32)
+    rows = jnp.asarray(found)
+    gap, segment, point = whole.gap[rows], whole.segment[rows], whole.point[rows]
+    low, high = jnp.min(scene.surface.nodes, axis=0), jnp.max(scene.surface.nodes, axis=0)
+
+    def dispatch(value):
+        return value + 1
+
+    def read(x, low, high):
+        return jnp.any(jnp.all((x >= low) & (x <= high), axis=-1))
+
+    def write_contact(rows, gap, segment, point):
+        empty = empty_contact(jnp.zeros((num_rows, 2), gap.dtype), jnp.zeros((), bool))
+        return empty._replace(
+            gap=empty.gap.at[rows].set(gap),
+            xi=empty.xi.at[rows].set(gap),
+            segment=empty.segment.at[rows].set(segment),
+            point=empty.point.at[rows].set(point),
+            normal=empty.normal.at[rows].set(point),
+            found=empty.found.at[rows].set(True),
+            active=empty.active.at[rows].set(gap < 0),
+        )
+
+    def write_three(rows, gap, segment):
+        return (
+            jnp.full((num_rows,), -1, jnp.int32).at[rows].set(segment),
+            jnp.zeros((num_rows,), gap.dtype).at[rows].set(gap),
+            jnp.zeros((num_rows,), bool).at[rows].set(True),
+        )
+
+    # The Contact's bytes per row: gap, xi, segment, point, normal, found, active.
+    row_bytes = 5 * x.dtype.itemsize + 4 + 2
+    buffer = np.empty(num_rows * row_bytes, np.uint8)
+    return {
+        "floor: NumPy fill of the Contact's bytes": (lambda: buffer.fill(0), ()),
+        "floor: dispatch": (jax.jit(dispatch), (gap[:1],)),
+        "floor: read x once": (jax.jit(read), (x, low, high)),
+        "floor: write Contact": (jax.jit(write_contact), (rows, gap, segment, point)),
+        "floor: write 3 fields": (jax.jit(write_three), (rows, gap, segment)),
+    }
+
+
+def same(result, expected, what: str):
+    """Raises unless every field of two ``Contact`` s is bit-identical."""
+    for name in expected._fields:
+        got, wanted = np.asarray(getattr(result, name)), np.asarray(getattr(expected, name))
+        if not np.array_equal(got, wanted):
+            raise AssertionError(f"{what}: field {name} differs from the whole program's")
+
+
+def kernels(jitted, args) -> int:
+    """Thunks the CPU runtime runs for one call: instructions of the entry
+    computation and of every branch, loop body and called computation, less
+    those that run nothing (fusion bodies are one kernel; loop bodies counted once)."""
+    text = re.sub(r"/\*.*?\*/", "", jitted.lower(*args).compile().as_text())
+    bodies, name = {}, None
+    for line in text.splitlines():
+        head = re.match(r"^(?:ENTRY )?%(\S+) .*\{$", line)
+        if head:
+            name = head.group(1)
+            bodies[name] = []
+            if line.startswith("ENTRY"):
+                entry = name
+        elif name and re.match(r"^\s+(ROOT )?%", line):
+            bodies[name].append(line)
+    count, todo, seen = 0, [entry], set()
+    while todo:
+        computation = todo.pop()
+        if computation in seen:
+            continue
+        seen.add(computation)
+        for line in bodies[computation]:
+            opcode = re.search(r"= (?:\([^=]*?\)|\S+) ([a-z][a-z0-9-]*)\(", line)
+            opcode = opcode.group(1) if opcode else ""
+            if opcode in ("conditional", "while", "call"):
+                attrs = r"(?:branch_computations=\{[^}]*\}|body=%\S+|condition=%\S+|to_apply=%\S+)"
+                for found in re.findall(attrs, line):
+                    todo += re.findall(r"%([\w.-]+)", found)
+            elif opcode and opcode not in _FREE:
+                count += 1
+    return count
+
+
+# The stage each library function belongs to, for attributing a thunk by its call stack.
+STAGE_OF = {
+    "rows_ok": "broad",
+    "resolve_segments": "broad",
+    "broad_phase": "broad",
+    "kept_rows": "kept",
+    "list_candidates": "cells",
+    "search_all": "search",
+    "search_listed": "search",
+    "contact_from_choice": "assemble",
+    "write_blocks": "write",
+    "empty_contact": "write",
+}
+
+
+def stage_of_instructions(text: str) -> dict:
+    """instruction name -> stage, from the innermost library function in its
+    call stack (the metadata of a compiled program's text)."""
+    tables = {}
+    for table in ("FunctionNames", "FileLocations", "StackFrames"):
+        block = re.search(rf"^{table}\n(.*?)\n\n", text, re.S | re.M)
+        tables[table] = dict(re.findall(r"^(\d+) (.*)$", block.group(1), re.M) if block else [])
+    functions = {key: value.strip('"') for key, value in tables["FunctionNames"].items()}
+    location = {
+        key: re.search(r"function_name_id=(\d+)", value).group(1)
+        for key, value in tables["FileLocations"].items()
+    }
+    frames = {
+        key: re.search(r"file_location_id=(\d+) parent_frame_id=(\d+)", value).groups()
+        for key, value in tables["StackFrames"].items()
+    }
+
+    def stage(frame):
+        while frame in frames:
+            place, parent = frames[frame]
+            name = functions.get(location.get(place, ""), "")
+            if name in STAGE_OF:
+                return STAGE_OF[name]
+            # The text names a frame's parent by its number plus one (0: none).
+            frame = str(int(parent) - 1)
+        return "other"
+
+    found = re.findall(r"^\s+(?:ROOT )?%(\S+) = .*?stack_frame_id=(\d+)", text, re.M)
+    return {name: stage(frame) for name, frame in found}
+
+
+def profile(jitted, args, out: str, repeats: int = 5) -> list[str]:
+    """Thunk time of ``jitted`` per call, by stage and for the ten costliest
+    thunks, from a perfetto trace (microseconds, inflated by the tracing)."""
+    call = jitted.lower(*args).compile()
+    stages = stage_of_instructions(call.as_text())
+    jax.block_until_ready(call(*args))
+    with jax.profiler.trace(out, create_perfetto_trace=True):
+        for _ in range(repeats):
+            jax.block_until_ready(call(*args))
+    (path,) = glob.glob(os.path.join(out, "**", "perfetto_trace.json.gz"), recursive=True)
+    with gzip.open(path) as stream:
+        events = json.load(stream)
+    events = events["traceEvents"] if isinstance(events, dict) else events
+    spent, by_stage, runs = Counter(), Counter(), 0
+    for event in events:
+        name = event.get("name", "")
+        # Branches and loops hold the thunks they run: count those only.
+        if event.get("ph") == "X" and name in stages and not name.startswith(("cond", "while")):
+            spent[name] += event["dur"] / repeats
+            by_stage[stages[name]] += event["dur"] / repeats
+            runs += 1
+    lines = [f"{runs / repeats:.0f} thunks run per call; by stage:"]
+    lines += [f"{us:10.1f} us  {stage}" for stage, us in by_stage.most_common()]
+    lines.append("costliest thunks:")
+    lines += [f"{us:10.1f} us  {name} ({stages[name]})" for name, us in spent.most_common(10)]
+    return lines
+
+
+@functools.cache
+def against(revision: str):
+    """``(package, sized_contact)`` of the bucket sort at git ``revision``, imported
+    as ``jaxcontact_against`` from an extracted copy."""
+    folder = tempfile.mkdtemp(prefix="jaxcontact-against-")
+    archive = subprocess.run(
+        ["git", "archive", revision, "jaxcontact"], check=True, capture_output=True
+    ).stdout
+    subprocess.run(["tar", "-x", "-C", folder], input=archive, check=True)
+    os.rename(os.path.join(folder, "jaxcontact"), os.path.join(folder, "jaxcontact_against"))
+    for path in glob.glob(os.path.join(folder, "jaxcontact_against", "**", "*.py"), recursive=True):
+        with open(path) as stream:
+            text = re.sub(r"\bjaxcontact\b", "jaxcontact_against", stream.read())
+        with open(path, "w") as stream:
+            stream.write(text)
+    sys.path.insert(0, folder)
+    import jaxcontact_against
+    from jaxcontact_against._sizes import measure as measure_then
+    from jaxcontact_against.bench._run import sized_contact
+
+    return jaxcontact_against, functools.partial(_sized_then, measure_then, sized_contact)
+
+
+def _sized_then(measure_then, sized_contact, scene, surface):
+    sizes = measure_then(scene.x, surface, radius=scene.radius)
+    return sized_contact(scene.radius, sizes)
+
+
+def numba_call(scene):
+    """The numba grid on one thread, compiled, or None where numba is missing."""
+    from jaxcontact.bench import baselines, numba_grid
+
+    if baselines.unavailable("numba grid (1 thread)"):
+        return None
+    x = np.asarray(scene.x)
+    start, end = _run.endpoints(scene.surface)
+    numba_grid.compile_for("closest", x.dtype)
+    return lambda: numba_grid.closest(x, start, end, scene.radius), ()
+
+
+def run_scene(key, repeats, revision=None, profile_dir=None) -> str:
+    scene = build(*SCENES[key])
+    sizes = measure(scene.x, scene.surface, radius=scene.radius)
+    whole = _run.sized_contact(scene.radius, sizes)
+    expected = whole(scene.x, scene.surface)
+    calls = {"bucket_sort (sized)": (whole, (scene.x, scene.surface))}
+    if revision:
+        package, sized_then = against(revision)
+        surface = package.Surface(*scene.surface)
+        then = sized_then(scene, surface)
+        same(then(scene.x, surface), expected, f"bucket_sort at {revision}")
+        calls[f"bucket_sort (sized) at {revision}"] = (then, (scene.x, surface))
+    compact = without_write_back(sizes)
+    radius = jnp.asarray(scene.radius, scene.x.dtype)
+    calls["bucket_sort without write-back"] = (compact, (scene.x, scene.surface, radius))
+    part, rows = compact(scene.x, scene.surface, radius)
+    real = np.asarray(rows) < scene.x.shape[0]
+    for name in expected._fields[:-1]:
+        written = np.asarray(getattr(expected, name))[np.asarray(rows)[real]]
+        if not np.array_equal(written, np.asarray(getattr(part, name))[real]):
+            raise AssertionError(f"without write-back: field {name} differs")
+    stages = staged_calls(scene, sizes, expected)
+    calls |= {f"stage: {name}": call for name, call in stages.items()}
+    calls |= floor_calls(scene, expected)
+    numba = numba_call(scene)
+    if numba:
+        calls["numba grid (1 thread)"] = numba
+    timings = time_interleaved(calls, repeats=repeats)
+    base = timings["bucket_sort (sized)"].median_s
+    found = int(np.asarray(expected.found).sum())
+    lines = [
+        f"### {SCENES[key][0]}, N = {scene.x.shape[0]:,}, M = {scene.surface.segments.shape[0]:,}",
+        "",
+        f"{found:,} rows found ({found / scene.x.shape[0]:.2%}); kept slaves "
+        f"{sizes.slave_capacity:,} ({sizes.block_capacity} blocks of {sizes.block_size}); "
+        f"cells {'x'.join(map(str, sizes.grid_shape)) if sizes.use_cells else 'none'}",
+        "",
+        "| program | median ms | p10-p90 ms | of the whole | kernels |",
+        "|---|---:|---:|---:|---:|",
+    ]
+    stage_sum = 0.0
+    for name, timing in timings.items():
+        jitted, args = calls[name]
+        count = kernels(jitted, args) if hasattr(jitted, "lower") else ""
+        if name.startswith("stage:"):
+            stage_sum += timing.median_s
+        lines.append(
+            f"| {name} | {timing.median_s * 1e3:.3f} | {timing.p10_s * 1e3:.3f}-"
+            f"{timing.p90_s * 1e3:.3f} | {timing.median_s / base:.2f} | {count} |"
+        )
+    lines.append(f"| sum of the stages | {stage_sum * 1e3:.3f} | | {stage_sum / base:.2f} | |")
+    if profile_dir:
+        lines += ["", "The whole program's thunks, traced (inflated by the tracing):", "", "```"]
+        lines += profile(whole, (scene.x, scene.surface), os.path.join(profile_dir, key))
+        lines.append("```")
+    return "\n".join(lines + [""])
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    default = ["cutting-81939", "cutting-1e6", "die-1e5"]
+    parser.add_argument("--scenes", nargs="+", choices=SCENES, default=default)
+    parser.add_argument("--repeats", type=int, default=20, help="timed runs of each program")
+    parser.add_argument("--quick", action="store_true", help="small scenes, 5 runs: a smoke test")
+    parser.add_argument("--against", help="git revision whose bucket sort is timed beside")
+    parser.add_argument("--profile", help="folder for perfetto traces of the whole programs")
+    args = parser.parse_args(argv)
+    command = " ".join(["python benchmarks/stages.py", *(sys.argv[1:] if argv is None else argv)])
+    print(f"`{command}`; {_run.machine()}; float32", flush=True)
+    scenes, repeats = args.scenes, args.repeats
+    if args.quick:
+        scenes, repeats = ["cutting-10000", "die-1e4"], 5
+    for key in scenes:
+        print(run_scene(key, repeats, args.against, args.profile), flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
