@@ -81,8 +81,8 @@ def run_methods(methods, check, *, repeats, slow_s, library, prepare_args=(), **
 
     Args:
       methods: name -> ``(fn, args)``, a peer's ``prepare`` (called with
-        ``prepare_args``, it returns them), or a string saying why that method
-        is not run (its row's note). A jitted ``fn`` is compiled ahead of the
+        ``prepare_args``, it returns them or a string), or a string saying
+        why that method is not run (its row's note). A jitted ``fn`` is compiled ahead of the
         runs (``compile_s``: tracing, lowering and compiling) and XLA's
         account of the compiled program is kept: ``temp_mib`` (temporaries),
         ``out_mib`` (outputs) and ``args_mib`` (arguments). A plain ``fn``
@@ -102,10 +102,12 @@ def run_methods(methods, check, *, repeats, slow_s, library, prepare_args=(), **
     rows, timed, single = [], {}, {}
     for name, method in methods.items():
         entry = row(method=name, **fields)
+        if callable(method):
+            method = method(*prepare_args)  # (fn, args), or why it cannot run here
         if isinstance(method, str):
             rows.append({**entry, "dtype": "", "note": method})
             continue
-        fn, args = method(*prepare_args) if callable(method) else method
+        fn, args = method
         if hasattr(fn, "lower"):
             call, compile_s = compiled_call(fn, args)
             entry.update(memory_fields(call))
@@ -343,3 +345,15 @@ def main(run, description, argv=None, *, slow: bool = False) -> int:
     options = {"slow_s": args.slow} if slow else {}
     print(run(args.quick, args.out, args.repeats, **options))
     return 0
+
+
+def cores_short_of(threads: int) -> str | None:
+    """Why a peer on ``threads`` threads cannot run in this process, or None.
+
+    Under ``taskset -c 0`` (a pinned run) one core is allowed, and numba
+    refuses more threads than cores.
+    """
+    cores = len(os.sched_getaffinity(0))
+    if threads <= cores:
+        return None
+    return f"not run: {threads} threads, {cores} core allowed (pinned)"

@@ -33,7 +33,7 @@ import importlib
 
 import numpy as np
 
-from jaxcontact.bench import ipc, numba_grid
+from jaxcontact.bench import _run, ipc, numba_grid
 
 
 def cross(u, v):
@@ -341,6 +341,9 @@ def _numba_grid(threads):
     """prepare for ``numba_grid.closest`` on ``threads``: compiled ahead (``fn.compile_s``)."""
 
     def prepare(x, start, end, radius):
+        short = _run.cores_short_of(threads)
+        if short:
+            return short
         compile_s = numba_grid.compile_for("closest", x.dtype, threads)
         fn = functools.partial(numba_grid.closest, radius=radius, threads=threads)
         fn.compile_s = compile_s  # reported apart, as a jitted peer's compilation is
@@ -353,8 +356,9 @@ def _plain(peer):
     return lambda x, start, end, radius: (functools.partial(peer, radius=radius), (x, start, end))
 
 
-# name -> (module it needs, or None; prepare(x, start, end, radius) -> (fn, args)). A plain
-# fn with a ``compile_s`` attribute was compiled by prepare, outside the timer.
+# name -> (module it needs, or None; prepare(x, start, end, radius) -> (fn, args), or a
+# string: why it cannot run here). A plain fn with a ``compile_s`` attribute was
+# compiled by prepare, outside the timer.
 PEERS = {
     "NumPy dense": (None, _plain(numpy_dense)),
     "NumPy box-then-dense": (None, _plain(numpy_box_then_dense)),

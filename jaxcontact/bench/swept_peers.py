@@ -66,6 +66,9 @@ def _numba_grid(threads):
     """prepare for ``numba_grid.swept`` on ``threads``: compiled ahead (``fn.compile_s``)."""
 
     def prepare(x_prev, x, start, end):
+        short = _run.cores_short_of(threads)
+        if short:
+            return short
         compile_s = numba_grid.compile_for("swept", x.dtype, threads)
         fn = functools.partial(numba_grid.swept, threads=threads)
         fn.compile_s = compile_s
