@@ -80,11 +80,12 @@ def search_listed(kernel, rows, segments: Segments, listed: CellLists, sizes: Si
     ``kernel(*row, segment)`` scores a pair; ``rows`` are the kept slaves' f[S, ...]
     arrays. A row costs as many slots as the fullest list it is searched
     with. Kept blocks hold many slaves whose cells are empty (a block is kept
-    when its box meets the master's), so above ``sizes.chunk_rows`` rows they are
-    ordered by list length, longest first, and searched a chunk at a time,
-    each chunk only as far as its own longest list; the loop stops at the
-    first chunk of empty lists. Each row's answer does not depend on the
-    order: it meets its own list in the same order either way.
+    when one of its rows meets the master's box), so above
+    ``sizes.chunk_rows`` rows they are ordered by list length, longest
+    first, and searched a chunk at a time, each chunk only as far as its
+    own longest list; the loop stops at the first chunk of empty lists.
+    Each row's answer does not depend on the order: it meets its own list
+    in the same order either way.
     """
     num_rows, chunk_rows = listed.first.shape[0], sizes.chunk_rows
     capacity, dtype = sizes.cell_capacity, segments.start.dtype
