@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import functools
 import os
 import platform
 import sys
@@ -20,7 +21,7 @@ import jax
 import numpy as np
 
 from jaxcontact import _bucket
-from jaxcontact.bench import oracle
+from jaxcontact.bench import numba_grid, oracle
 from jaxcontact.bench.timing import Timing, compiled_call, pinned_note, time_interleaved
 
 COLUMNS = (
@@ -357,3 +358,17 @@ def cores_short_of(threads: int) -> str | None:
     if threads <= cores:
         return None
     return f"not run: {threads} threads, {cores} core allowed (pinned)"
+
+
+def numba_peer(kind: str, threads: int, dtype, args: tuple, **options):
+    """A peer's ``prepare`` result for ``numba_grid.<kind>`` (``"closest"`` or
+    ``"swept"``) on ``threads``: ``(fn, args)``, compiled ahead for ``dtype``
+    (``fn.compile_s``, reported apart as a jitted peer's compilation is), or
+    why it cannot run in this process (``cores_short_of``)."""
+    short = cores_short_of(threads)
+    if short:
+        return short
+    compile_s = numba_grid.compile_for(kind, dtype, threads)
+    fn = functools.partial(getattr(numba_grid, kind), threads=threads, **options)
+    fn.compile_s = compile_s
+    return fn, args

@@ -33,7 +33,7 @@ import importlib
 
 import numpy as np
 
-from jaxcontact.bench import _run, ipc, numba_grid
+from jaxcontact.bench import _run, ipc
 
 
 def cross(u, v):
@@ -341,13 +341,7 @@ def _numba_grid(threads):
     """prepare for ``numba_grid.closest`` on ``threads``: compiled ahead (``fn.compile_s``)."""
 
     def prepare(x, start, end, radius):
-        short = _run.cores_short_of(threads)
-        if short:
-            return short
-        compile_s = numba_grid.compile_for("closest", x.dtype, threads)
-        fn = functools.partial(numba_grid.closest, radius=radius, threads=threads)
-        fn.compile_s = compile_s  # reported apart, as a jitted peer's compilation is
-        return fn, (x, start, end)
+        return _run.numba_peer("closest", threads, x.dtype, (x, start, end), radius=radius)
 
     return prepare
 

@@ -20,15 +20,13 @@ by two segments), ``wrong_segment`` (another segment, met later) and
 
 from __future__ import annotations
 
-import functools
-
 import jax
 import jax.numpy as jnp
 import numpy as np
 
 from jaxcontact import swept
 from jaxcontact._sizes import measure
-from jaxcontact.bench import _run, baselines, ipc, numba_grid
+from jaxcontact.bench import _run, baselines, ipc
 from jaxcontact.scenes import cutting_scene, paper_scene
 
 LIBRARY = "bucket_swept (sized)"
@@ -66,13 +64,7 @@ def _numba_grid(threads):
     """prepare for ``numba_grid.swept`` on ``threads``: compiled ahead (``fn.compile_s``)."""
 
     def prepare(x_prev, x, start, end):
-        short = _run.cores_short_of(threads)
-        if short:
-            return short
-        compile_s = numba_grid.compile_for("swept", x.dtype, threads)
-        fn = functools.partial(numba_grid.swept, threads=threads)
-        fn.compile_s = compile_s
-        return fn, (x_prev, x, start, end)
+        return _run.numba_peer("swept", threads, x.dtype, (x_prev, x, start, end))
 
     return prepare
 
