@@ -18,6 +18,9 @@ the real output of the stage before:
 - assemble: the ``Contact`` of the kept slaves (the tie rule included);
 - write: their rows written into N rows of nothing found.
 
+The compact form (``ContactList``: the same search, the found rows packed
+into a measured capacity, no N rows written) is timed beside the whole.
+
 Their sum is not the whole program's time (a stage apart pays a dispatch and
 loses fusion across its borders) but shows the split. Beside them, in the
 same round-robin: the whole program, the floors (an empty jitted call; one
@@ -51,12 +54,13 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxcontact import _bucket, _inputs
+from jaxcontact import _inputs
 from jaxcontact._assemble import contact_from_choice
 from jaxcontact._broad import broad_phase, kept_rows
+from jaxcontact._bucket import measure_contacts
 from jaxcontact._cells import list_candidates
 from jaxcontact._geometry import squared_distance
-from jaxcontact._narrow import Queries, in_stages, search_all, search_listed, vmapped
+from jaxcontact._narrow import search_all, search_listed, vmapped
 from jaxcontact._sizes import measure
 from jaxcontact._writeback import empty_contact, write_blocks
 from jaxcontact.bench import _run
@@ -108,30 +112,6 @@ def stage_programs(sizes, num_rows):
     programs = {"broad": broad, "kept": kept, "cells": cells, "search": search}
     programs |= {"assemble": assemble, "write": write}
     return {name: jax.jit(fn) for name, fn in programs.items()}
-
-
-def without_write_back(sizes):
-    """The whole program less its write-back: the kept slaves' ``Contact`` and
-    their rows (a compact result), with the whole program's stage borders."""
-
-    def contact(x, surface, radius):
-        slave_ok = _inputs.rows_ok(x, None)
-        segments = _inputs.resolve_segments(surface)
-        boxes, blocks = broad_phase(
-            x, x, slave_ok, segments, radius, sizes.block_size, sizes.block_capacity
-        )
-        (kept,), ok = kept_rows(blocks, None, x)
-        go = blocks.count > 0
-        queries = Queries((kept,), kept, ok)
-        choice = _bucket._choose_if(squared_distance, sizes, go, queries, segments, boxes, None)
-
-        def assemble(chosen):
-            return contact_from_choice(kept, segments, chosen[0], radius, chosen[1], ok)
-
-        empty = empty_contact(kept, jnp.zeros((), bool))
-        return in_stages(go, [assemble], [empty], choice), blocks.rows
-
-    return jax.jit(contact)
 
 
 def staged_calls(scene, sizes, whole):
@@ -367,15 +347,11 @@ def run_scene(key, repeats, revision=None, profile_dir=None) -> str:
         then = sized_then(scene, surface)
         same(then(scene.x, surface), expected, f"bucket_sort at {revision}")
         calls[f"bucket_sort (sized) at {revision}"] = (then, (scene.x, surface))
-    compact = without_write_back(sizes)
-    radius = jnp.asarray(scene.radius, scene.x.dtype)
-    calls["bucket_sort without write-back"] = (compact, (scene.x, scene.surface, radius))
-    part, rows = compact(scene.x, scene.surface, radius)
-    real = np.asarray(rows) < scene.x.shape[0]
-    for name in expected._fields[:-1]:
-        written = np.asarray(getattr(expected, name))[np.asarray(rows)[real]]
-        if not np.array_equal(written, np.asarray(getattr(part, name))[real]):
-            raise AssertionError(f"without write-back: field {name} differs")
+    # The compact form: the same search, the found rows packed, no N rows written.
+    compact_sizes = measure_contacts(scene.x, scene.surface, scene.radius, None, sizes, 1.5)
+    compact = _run.sized_contact(scene.radius, compact_sizes)
+    calls["bucket_sort (sized, compact)"] = (compact, (scene.x, scene.surface))
+    same(compact(scene.x, scene.surface).to_contact(scene.x.shape[0]), expected, "compact")
     stages = staged_calls(scene, sizes, expected)
     calls |= {f"stage: {name}": call for name, call in stages.items()}
     calls |= floor_calls(scene, expected)

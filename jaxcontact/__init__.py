@@ -10,6 +10,7 @@ from jaxcontact._shard import contact_forces as contact_forces
 from jaxcontact._shard import sharded as sharded
 from jaxcontact._sizes import Sizes as Sizes
 from jaxcontact._types import Contact as Contact
+from jaxcontact._types import ContactList as ContactList
 from jaxcontact._types import Crossing as Crossing
 from jaxcontact._types import Surface as Surface
 from jaxcontact._validate import validate as validate

@@ -20,12 +20,14 @@ candidates found with a skin, across steps.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 from collections.abc import Callable
 from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from jaxcontact import _inputs
 from jaxcontact._assemble import contact_from_choice, crossing_from_choice
@@ -35,11 +37,17 @@ from jaxcontact._geometry import first_hit_time, squared_distance
 from jaxcontact._inputs import Segments
 from jaxcontact._lowest import one_scene_at_a_time
 from jaxcontact._narrow import Queries, choose, in_stages
-from jaxcontact._padded import cut_rows, pad_scene
+from jaxcontact._padded import cut_entries, cut_rows, pad_scene
 from jaxcontact._placement import searched_whole
-from jaxcontact._sizes import CELLS_ABOVE, Sizes, measure
-from jaxcontact._types import Array, Contact, Crossing, Surface
-from jaxcontact._writeback import empty_contact, empty_crossing, write_blocks
+from jaxcontact._sizes import CELLS_ABOVE, Sizes, grow, measure
+from jaxcontact._types import Array, Contact, ContactList, Crossing, Surface
+from jaxcontact._writeback import (
+    empty_contact,
+    empty_contact_list,
+    empty_crossing,
+    pack_found,
+    write_blocks,
+)
 
 
 class Candidates(NamedTuple):
@@ -120,6 +128,7 @@ class _How(NamedTuple):
     assemble: Callable  # assemble(choice, overflow) -> Contact | Crossing of the kept slaves
     empty: Callable  # empty(rows, overflow) -> the not-found result
     num_rows: int  # N
+    compact: int = 0  # entries of the compact form (ContactList); 0: N rows
 
 
 def _choose_if(kernel, sizes: Sizes, go, queries: Queries, segments: Segments, boxes, listed):
@@ -135,8 +144,9 @@ def _choose_if(kernel, sizes: Sizes, go, queries: Queries, segments: Segments, b
 def _search_kept(queries: Queries, blocks: Blocks, segments: Segments, boxes, listed, how: _How):
     """The narrow phase on the kept slaves and their rows written back.
 
-    Search, ``how.assemble(choice, overflow)`` and the scatter into
-    ``how.num_rows`` rows are each skipped when no block was kept
+    Search, ``how.assemble(choice, overflow)`` and the write into
+    ``how.num_rows`` rows (or the packing of the found ones into
+    ``how.compact`` entries) are each skipped when no block was kept
     (``_narrow.in_stages``); the search runs scene by scene under ``vmap``
     (``_lowest.one_scene_at_a_time``).
     """
@@ -144,15 +154,25 @@ def _search_kept(queries: Queries, blocks: Blocks, segments: Segments, boxes, li
     go = blocks.count > 0
     search = one_scene_at_a_time(functools.partial(_choose_if, how.kernel, how.sizes))
     chosen = search(go, *jax.lax.stop_gradient((queries, segments, boxes)), listed)
-    template = jnp.zeros((how.num_rows, 2), queries.query.dtype)
+    dtype = queries.query.dtype
+    if how.compact:
 
-    def write(part):
-        return write_blocks(part, blocks, how.empty(template, part.overflow), how.sizes.block_size)
+        def write(part):
+            return pack_found(part, blocks.rows, how.compact, how.num_rows)
 
+        nothing = empty_contact_list(how.compact, how.num_rows, dtype, no_overflow)
+    else:
+        template = jnp.zeros((how.num_rows, 2), dtype)
+
+        def write(part):
+            empty = how.empty(template, part.overflow)
+            return write_blocks(part, blocks, empty, how.sizes.block_size)
+
+        nothing = how.empty(template, no_overflow)
     return in_stages(
         go,
         [lambda chosen: how.assemble(*chosen), write],
-        [how.empty(queries.query, no_overflow), how.empty(template, no_overflow)],
+        [how.empty(queries.query, no_overflow), nothing],
         chosen,
     )
 
@@ -162,7 +182,10 @@ def _contact(x, surface, radius, mask, sizes: Sizes, candidates: Candidates | No
     # Bad rows are left in ``x``: the broad phase's test skips them, and the
     # kept rows are zeroed when gathered, so no pass over all N rows copies x.
     segments = _inputs.resolve_segments(surface)
+    compact = sizes.contact_capacity
     if x.shape[0] == 0 or segments.ok.shape[0] == 0:
+        if compact:
+            return empty_contact_list(compact, x.shape[0], x.dtype, jnp.zeros((), bool))
         return empty_contact(x, jnp.zeros((), bool))
     if candidates is None:
         slave_ok = _inputs.rows_ok(x, mask)
@@ -178,7 +201,7 @@ def _contact(x, surface, radius, mask, sizes: Sizes, candidates: Candidates | No
     def assemble(choice, cells_overflow):
         return contact_from_choice(kept, segments, choice, radius, cells_overflow, ok)
 
-    how = _How(squared_distance, sizes, assemble, empty_contact, x.shape[0])
+    how = _How(squared_distance, sizes, assemble, empty_contact, x.shape[0], compact)
     result = _search_kept(Queries((kept,), kept, ok), blocks, segments, boxes, listed, how)
     return result._replace(overflow=result.overflow | overflow)
 
@@ -226,6 +249,24 @@ def sized_bucket_sort(x, surface, *, radius, mask=None, sizes: Sizes, candidates
     return contact_jit(x, surface, radius, mask, sizes=sizes, candidates=candidates)
 
 
+def room_for_every_slot(sizes: Sizes) -> Sizes:
+    """``sizes`` whose compact form has an entry for every kept slave: it cannot overflow."""
+    return dataclasses.replace(sizes, contact_capacity=max(1, sizes.slave_capacity))
+
+
+def measure_contacts(x, surface, radius, mask, sizes: Sizes, slack: float) -> Sizes:
+    """``sizes`` with the compact form's capacity: the contacts found now times
+    ``slack`` (at least 1), as ``measure`` sizes the rest (concrete inputs).
+
+    Runs the compact search once with an entry for every kept slave, a
+    program of its own, and counts what it found.
+    """
+    wide = room_for_every_slot(sizes)
+    found = contact_jit(x, surface, radius, mask, sizes=wide).found
+    count = int(np.count_nonzero(np.asarray(found)))
+    return dataclasses.replace(sizes, contact_capacity=grow(count, slack))
+
+
 def sized_bucket_swept(x_prev, x, surface, *, mask=None, sizes: Sizes) -> Crossing:
     """``bucket_swept`` at given ``Sizes``, inputs checked; as ``sized_bucket_sort``."""
     x_prev, x, mask = _inputs.check_path_inputs(x_prev, x, mask)
@@ -258,7 +299,9 @@ def require_concrete(name: str, values, hint: str | None = None):
         )
 
 
-def bucket_sort(x: Array, surface: Surface, *, radius, mask: Array | None = None) -> Contact:
+def bucket_sort(
+    x: Array, surface: Surface, *, radius, mask: Array | None = None, compact: bool = False
+) -> Contact | ContactList:
     """Closest master segment of every slave near the master, by bucket sort.
 
     The one-call form: it measures the sizes of the bucket sort from the data
@@ -272,10 +315,13 @@ def bucket_sort(x: Array, surface: Surface, *, radius, mask: Array | None = None
       surface: the master ``Surface``; its nodes share ``x``'s dtype.
       radius: scalar search radius, >= 0.
       mask: optional bool[N], False for padding slaves.
+      compact: return the found contacts only, as a ``ContactList`` with an
+        entry for every slave the broad phase kept (``Search(compact=True)``
+        measures a tighter capacity once and reuses it).
 
     Returns:
       A ``Contact`` equal to ``all_to_all``'s (its sizes are measured for
-      this data, so ``overflow`` is False).
+      this data, so ``overflow`` is False), or its ``ContactList``.
 
     Example:
       >>> from jaxcontact import all_to_all, bucket_sort
@@ -292,7 +338,10 @@ def bucket_sort(x: Array, surface: Surface, *, radius, mask: Array | None = None
     use_cells = surface.segments.shape[0] > CELLS_ABOVE
     (x,), mask, surface, num_rows = pad_scene((x,), mask, surface)
     sizes = measure(x, surface, radius=radius, mask=mask, use_cells=use_cells)
-    return cut_rows(contact_jit(x, surface, radius, mask, sizes=sizes), num_rows)
+    if not compact:
+        return cut_rows(contact_jit(x, surface, radius, mask, sizes=sizes), num_rows)
+    found = contact_jit(x, surface, radius, mask, sizes=room_for_every_slot(sizes))
+    return cut_entries(found, num_rows)
 
 
 def bucket_swept(

@@ -150,3 +150,18 @@ def cut_rows(result, num_rows: int | None):
         lambda values: jax.device_put(np.asarray(values)[:num_rows] if values.ndim else values),
         result,
     )
+
+
+def cut_entries(entries, num_rows: int | None):
+    """A ``ContactList`` of padded rows with its padding entries naming ``num_rows``."""
+    if num_rows is None:
+        return entries
+    if not _on_cpu(entries):
+        return entries._replace(node=_renamed(entries.node, entries.found, num_rows))
+    node = np.where(np.asarray(entries.found), np.asarray(entries.node), num_rows)
+    return entries._replace(node=jax.device_put(node.astype(np.int32)))
+
+
+@jax.jit
+def _renamed(node, found, num_rows):
+    return jnp.where(found, node, num_rows).astype(jnp.int32)

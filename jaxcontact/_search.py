@@ -23,8 +23,16 @@ import numpy as np
 
 from jaxcontact import _bucket, _dense, _inputs
 from jaxcontact._placement import replicated, searched_whole
-from jaxcontact._sizes import CELLS_ABOVE, CHUNK_ROWS, Sizes, largest, measure, measure_batch
-from jaxcontact._types import Array, Contact, Crossing, Surface
+from jaxcontact._sizes import (
+    CELLS_ABOVE,
+    CHUNK_ROWS,
+    Sizes,
+    grow,
+    largest,
+    measure,
+    measure_batch,
+)
+from jaxcontact._types import Array, Contact, ContactList, Crossing, Surface
 
 METHODS = ("auto", "binned", "dense", "exhaustive")
 
@@ -123,6 +131,12 @@ class Search:
       block_size: slaves culled together (consecutive rows).
       cells_above: the segment count above which ``"auto"`` bins in cells.
       chunk_rows: kept slaves searched together, fullest cells first.
+      compact: ``closest`` returns the found contacts only, as a
+        ``ContactList`` whose capacity ``allocate`` measures (the contacts
+        found then, times ``slack``), instead of a ``Contact`` of N rows.
+        Faster where few slaves touch (the N rows are never written), and
+        what a force assembly by ``segment_sum`` over the contacts wants.
+        Not for the ``"exhaustive"`` method, nor for ``swept``.
     """
 
     radius: float | None = None
@@ -132,6 +146,7 @@ class Search:
     block_size: int = 64
     cells_above: int = CELLS_ABOVE
     chunk_rows: int = CHUNK_ROWS
+    compact: bool = False
 
     def __post_init__(self):
         # Plain Python numbers: the search is hashed as a static argument.
@@ -159,6 +174,13 @@ class Search:
                 raise ValueError(f"{name} must be an int >= 1; got {getattr(self, name)!r}")
         if self.cells_above < 0:
             raise ValueError(f"cells_above must be an int >= 0; got {self.cells_above}")
+        if not isinstance(self.compact, bool):
+            raise ValueError(f"compact must be a bool; got {self.compact!r}")
+        if self.compact and self.method == "exhaustive":
+            raise ValueError(
+                'compact=True needs a bucket method ("auto", "binned", "dense"); '
+                'the "exhaustive" method returns the dense Contact'
+            )
 
     # -- host ---------------------------------------------------------------
 
@@ -205,6 +227,7 @@ class Search:
             if self.radius is not None:
                 sizes = measure(x, surface, radius=self._reach, mask=mask, **self._sizing)
                 sizes = self._merged(sizes, at_least, "sizes")
+                sizes = self._room(sizes, x, surface, mask, at_least)
                 candidates, overflow = self._find(x, surface, mask, sizes)
             if x_prev is not None:
                 path_sizes = measure(x, surface, x_prev=x_prev, mask=mask, **self._sizing)
@@ -235,6 +258,7 @@ class Search:
             if self.radius is not None:
                 sizes = measure_batch(x, surface, radius=self._reach, mask=mask, **self._sizing)
                 sizes = self._merged(sizes, at_least, "sizes")
+                sizes = self._room(sizes, x, surface, mask, at_least, axes)
 
                 def find(x, surface, mask):
                     return self._find(x, surface, mask, sizes)
@@ -290,6 +314,27 @@ class Search:
         candidates = _bucket.find_jit(x, surface, reach, mask, sizes=sizes)
         return candidates, candidates.overflow
 
+    def _room(self, sizes: Sizes, x, surface, mask, at_least, axes=None) -> Sizes:
+        """``sizes`` with the compact form's capacity measured (the largest over
+        a batch, mapped over ``axes``), and at least ``at_least``'s; none
+        (the dense form) for a search that is not compact."""
+        if not self.compact:
+            return dataclasses.replace(sizes, contact_capacity=0)
+        radius = jnp.asarray(self.radius, x.dtype)
+        wide = _bucket.room_for_every_slot(sizes)
+
+        def count(x, surface, mask):
+            found = _bucket.contact_jit(x, surface, radius, mask, sizes=wide).found
+            return jnp.sum(found, dtype=jnp.int32)
+
+        if axes is not None:
+            count = jax.vmap(count, axes)
+        counts = count(x, surface, mask)
+        measured = dataclasses.replace(
+            sizes, contact_capacity=grow(int(np.max(np.asarray(counts))), self.slack)
+        )
+        return self._merged(measured, at_least, "sizes")
+
     @property
     def _reach(self) -> float:
         return self.radius + self.skin
@@ -325,7 +370,7 @@ class Search:
 
     def closest(
         self, state: SearchState, x: Array, surface: Surface, *, mask: Array | None = None
-    ) -> tuple[Contact, SearchState]:
+    ) -> tuple[Contact | ContactList, SearchState]:
         """The closest master segment of every slave within ``radius``: one step.
 
         Runs under ``jit``, ``lax.scan``, ``vmap`` and ``grad`` (gradients of
@@ -342,6 +387,8 @@ class Search:
           ``(contact, state)``. ``contact`` equals ``all_to_all(x, surface,
           radius=search.radius, mask=mask)`` whenever ``contact.overflow`` is
           False; when it is True, a contact may be missing: allocate again.
+          A compact search returns a ``ContactList`` instead, whose
+          ``to_contact(N)`` is that ``Contact``.
         """
         if self.radius is None:
             raise ValueError("closest needs a Search with a radius; this one searches paths only")
@@ -353,6 +400,12 @@ class Search:
                 "state has no closest-point sizes: make it with this search's allocate"
             )
         _bucket.check_sizes(state.sizes, x.shape[0], for_paths=False)
+        if bool(state.sizes.contact_capacity) != self.compact:
+            made, wanted = (("compact", "dense"), ("dense", "compact"))[self.compact]
+            raise ValueError(
+                f"state was allocated by a {made} search; this one is {wanted}: "
+                "allocate with this search"
+            )
         self._check_state(state, x, surface)
         return _closest(self, state, x, surface, mask)
 

@@ -53,6 +53,9 @@ class Sizes:
       span: most cells a segment's inflated box may cover, in x and in y.
       cell_capacity: most segments one cell may hold.
       chunk_rows: kept slaves searched together, longest cell lists first.
+      contact_capacity: entries of the compact result (``ContactList``,
+        ``Search(compact=True)``); 0 (the default) returns the dense
+        ``Contact`` of N rows.
     """
 
     num_slaves: int
@@ -65,6 +68,7 @@ class Sizes:
     span: tuple[int, int] = (1, 1)
     cell_capacity: int = 1
     chunk_rows: int = CHUNK_ROWS
+    contact_capacity: int = 0
 
     @property
     def slave_capacity(self) -> int:
@@ -72,7 +76,7 @@ class Sizes:
         return self.block_capacity * self.block_size
 
 
-def _grow(count: float, slack: float, least: int = 1) -> int:
+def grow(count: float, slack: float, least: int = 1) -> int:
     """``count * slack`` rounded up to its size class (at most 1/4 more).
 
     Sizes are static, so each distinct value compiles a program of its own:
@@ -82,7 +86,7 @@ def _grow(count: float, slack: float, least: int = 1) -> int:
 
 
 def _edge_class(edge: float) -> float:
-    """``edge`` rounded up to a power of 2**(1/4): as ``_grow``, for the cell edge."""
+    """``edge`` rounded up to a power of 2**(1/4): as ``grow``, for the cell edge."""
     return 2.0 ** (math.ceil(4 * math.log2(edge)) / 4)
 
 
@@ -202,7 +206,7 @@ def measure(
     if num_rows == 0 or num_segments == 0:
         return Sizes(num_rows, block_size, 1, for_paths, use_cells, chunk_rows=chunk_rows)
     measured = _measure(x_prev, x, surface, radius, mask, block_size, num_blocks)
-    block_capacity = min(num_blocks, _grow(int(measured.num_blocks), slack))
+    block_capacity = min(num_blocks, grow(int(measured.num_blocks), slack))
     if not use_cells:
         return Sizes(num_rows, block_size, block_capacity, for_paths, chunk_rows=chunk_rows)
 
@@ -241,7 +245,7 @@ def measure(
         grid_shape=grid_shape,
         cell_size=float(cell_size),
         span=span,
-        cell_capacity=_grow(most_per_cell, slack),
+        cell_capacity=grow(most_per_cell, slack),
         chunk_rows=chunk_rows,
     )
 
@@ -260,6 +264,7 @@ def largest(first: Sizes, second: Sizes) -> Sizes:
         cell_size=max(first.cell_size, second.cell_size),
         span=tuple(map(max, first.span, second.span)),
         cell_capacity=max(first.cell_capacity, second.cell_capacity),
+        contact_capacity=max(first.contact_capacity, second.contact_capacity),
     )
 
 

@@ -1,6 +1,6 @@
 """The pytrees that go in and come out of every detector.
 
-All three are ``NamedTuple``s, so they are immutable, registered with JAX as
+All four are ``NamedTuple``s, so they are immutable, registered with JAX as
 pytrees (they pass through ``jit``, ``vmap``, ``grad`` and ``lax.scan``), and
 unpack like tuples. Shapes below use ``N`` for slaves, ``P`` for master nodes
 and ``M`` for master segments; ``f`` is the input's float dtype.
@@ -11,6 +11,7 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import jax
+import jax.numpy as jnp
 
 Array = jax.Array
 
@@ -46,6 +47,50 @@ class Contact(NamedTuple):
     found: Array  # bool[N]  a real segment lies within the radius
     active: Array  # bool[N]  found & (gap < 0)
     overflow: Array  # bool[]  a fixed capacity was too small; a contact may be missing
+
+
+class ContactList(NamedTuple):
+    """The found contacts only, packed into a fixed number of entries.
+
+    The compact form of ``Contact`` (as jax-md's ``Sparse`` neighbour lists
+    beside ``Dense``): entry ``j`` says that slave ``node[j]`` touches
+    segment ``segment[j]``, with the same gap, xi, point and normal as row
+    ``node[j]`` of the ``Contact``. Found entries come first, in increasing
+    ``node``; the entries after them are padding: ``node = N`` (one past the
+    last slave, so ``x.at[node].add(f)`` and ``jax.ops.segment_sum(f, node,
+    N)`` drop them), ``segment = -1``, zeros elsewhere, ``found`` False. The
+    capacity ``K`` is static (``Search(compact=True)`` measures it at
+    ``allocate``); ``overflow`` is True when more contacts were found than
+    it holds, and then some are missing.
+    """
+
+    node: Array  # i32[K]  slave row of each entry; N in padding entries
+    gap: Array  # f[K]  signed gap; negative is penetration
+    xi: Array  # f[K]  projection coordinate on the segment, in [0, 1]
+    segment: Array  # i32[K]  the segment, -1 in padding entries
+    point: Array  # f[K, 2]  closest point on the segment
+    normal: Array  # f[K, 2]  outward unit normal of the segment
+    found: Array  # bool[K]  the entry holds a contact (False: padding)
+    active: Array  # bool[K]  found & (gap < 0)
+    overflow: Array  # bool[]  more contacts than entries: some are missing
+
+    def to_contact(self, num_rows: int) -> Contact:
+        """The dense ``Contact`` of ``num_rows`` slaves (N, static) these entries describe."""
+
+        def put(values, empty):
+            shape = (num_rows,) + values.shape[1:]
+            return jnp.full(shape, empty, values.dtype).at[self.node].set(values, mode="drop")
+
+        return Contact(
+            gap=put(self.gap, 0),
+            xi=put(self.xi, 0),
+            segment=put(self.segment, -1),
+            point=put(self.point, 0),
+            normal=put(self.normal, 0),
+            found=put(self.found, False),
+            active=put(self.active, False),
+            overflow=self.overflow,
+        )
 
 
 class Crossing(NamedTuple):

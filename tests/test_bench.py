@@ -189,10 +189,11 @@ def test_peer_rows_and_csv(tmp_path, monkeypatch):
     monkeypatch.setattr(peers, "PAIR_BUDGET", 5_000)  # dense (19,840 pairs) skipped, box not
     rows = peers.run_scene("cutting, tool in (x_tip=18)", 1_000, 18.0, repeats=2, slow_s=60)
     by_method = {row["method"]: row for row in rows}
-    assert set(by_method) == {"all_to_all", peers.LIBRARY, "NumPy dense", "NumPy box-then-dense"}
+    ours = {"all_to_all", peers.LIBRARY, peers.COMPACT}
+    assert set(by_method) == ours | {"NumPy dense", "NumPy box-then-dense"}
     assert by_method["NumPy dense"]["note"].startswith("skipped")
     assert by_method["NumPy dense"]["median_ms"] == ""
-    for method in ("all_to_all", peers.LIBRARY, "NumPy box-then-dense"):
+    for method in (*ours, "NumPy box-then-dense"):
         row = by_method[method]
         assert row["median_ms"] > 0 and row["runs"] == 2
         assert row["missed"] == row["false"] == row["wrong_segment"] == 0, row
@@ -200,7 +201,7 @@ def test_peer_rows_and_csv(tmp_path, monkeypatch):
     _run.write(str(tmp_path), "peers", rows, "text")
     with open(tmp_path / "peers.csv") as stream:
         written = list(csv.DictReader(stream))
-    assert len(written) == 4 and list(written[0]) == list(_run.COLUMNS)
+    assert len(written) == len(rows) == 5 and list(written[0]) == list(_run.COLUMNS)
 
 
 def test_time_interleaved_runs_each_call_round_robin():

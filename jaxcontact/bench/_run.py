@@ -21,6 +21,7 @@ import jax
 import numpy as np
 
 from jaxcontact import _bucket
+from jaxcontact._types import ContactList
 from jaxcontact.bench import numba_grid, oracle
 from jaxcontact.bench.timing import Timing, compiled_call, pinned_note, time_interleaved
 
@@ -211,10 +212,12 @@ def contact_of(result):
     return result
 
 
-def answer_of(result):
-    """``(segment, gap, found)`` as NumPy arrays, from a ``Contact``, a ``Search`` step's
-    ``(Contact, state)`` or a peer's tuple."""
+def answer_of(result, num_rows: int | None = None):
+    """``(segment, gap, found)`` as NumPy arrays, from a ``Contact``, a ``ContactList``
+    (of ``num_rows`` slaves), a ``Search`` step's ``(Contact, state)`` or a peer's tuple."""
     result = contact_of(result)
+    if isinstance(result, ContactList):
+        result = result.to_contact(num_rows)
     if hasattr(result, "found"):
         return np.asarray(result.segment), np.asarray(result.gap), np.asarray(result.found)
     return tuple(np.asarray(part) for part in result[:3])
@@ -222,7 +225,7 @@ def answer_of(result):
 
 def check(result, x, start, end, reference) -> oracle.Mismatch:
     """The oracle's count of how ``result`` differs from ``reference``."""
-    return oracle.compare(*answer_of(result), x, start, end, reference)
+    return oracle.compare(*answer_of(result, len(x)), x, start, end, reference)
 
 
 def oracle_fields(result, x, start, end, reference) -> dict:

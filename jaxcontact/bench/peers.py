@@ -5,7 +5,8 @@ Scenes (docs/scenes.md): the cutting scene with the tool in the workpiece
 (``x_tip = 20.5``), and the rough die from (10^4, 10^3) to (10^6, 10^5). On
 each, ``all_to_all`` and ``bucket_sort (sized)`` (float32, jit: the bucket
 sort with its ``Sizes`` measured outside the timer, its whole search, broad
-phase included, inside) and every peer of ``baselines.PEERS`` that is
+phase included, inside), ``bucket_sort (sized, compact)`` (the same search
+returning the found contacts only, a ``ContactList``) and every peer of ``baselines.PEERS`` that is
 installed are run round-robin; ``ratio`` is a method's median over
 ``bucket_sort (sized)``'s. Every answer is checked against the float64
 oracle, and each kind of disagreement is its own column (missed, false, ties
@@ -28,12 +29,15 @@ import jax
 import numpy as np
 
 from jaxcontact import all_to_all
+from jaxcontact._bucket import measure_contacts
 from jaxcontact._sizes import measure
 from jaxcontact.bench import _run, baselines, oracle
 from jaxcontact.scenes import cutting_scene, rough_die_scene
 
 # The library's bucket sort, as timed here: fixed sizes, measured outside the timer.
 LIBRARY = "bucket_sort (sized)"
+# The same with the compact result (a ``ContactList`` of the found contacts).
+COMPACT = "bucket_sort (sized, compact)"
 PAIR_BUDGET = 5e7  # NumPy (N, M, 2) float32 temporaries: about 0.4 GB each
 DENSE_BUDGET = 1.2e9  # all_to_all pairs per call: a few seconds on a CPU core
 
@@ -81,12 +85,16 @@ def _methods(scene):
     """name -> (fn, args): the library's two detectors, then the peers."""
     radius = scene.radius
     sizes = measure(scene.x, scene.surface, radius=radius)
+    compact_sizes = measure_contacts(scene.x, scene.surface, radius, None, sizes, slack=1.5)
     methods = {
         "all_to_all": (
             jax.jit(functools.partial(all_to_all, radius=radius)),
             (scene.x, scene.surface),
         ),
         LIBRARY: (_run.sized_contact(radius, sizes), (scene.x, scene.surface)),
+        # The compact form (``Search(compact=True)``): the found contacts only,
+        # in a capacity measured once outside the timer, as the other sizes.
+        COMPACT: (_run.sized_contact(radius, compact_sizes), (scene.x, scene.surface)),
     }
     for name, (_, prepare) in baselines.PEERS.items():
         methods[name] = prepare
@@ -152,7 +160,7 @@ def plot(rows, out) -> list[str]:
         mine = [r for r in rows if r["scene"].startswith(kind) and r["median_ms"] != ""]
         for name in dict.fromkeys(r["method"] for r in mine):
             points = [(r["nodes"], r["median_ms"]) for r in mine if r["method"] == name]
-            style = "-" if name in ("all_to_all", LIBRARY) else "--"
+            style = "-" if name in ("all_to_all", LIBRARY, COMPACT) else "--"
             axes.plot(*zip(*points, strict=True), style, marker="o", ms=3, label=name)
         axes.set(xscale="log", yscale="log", xlabel="slave nodes N", ylabel="median (ms)")
         axes.set_title(kind, fontsize=9)

@@ -1,0 +1,144 @@
+"""The compact result (``ContactList``): the found rows of the dense ``Contact``, packed.
+
+Every test compares it with the dense form: entry by entry, the rows the
+dense ``Contact`` reports as found, bit for bit (both come from the same
+compiled pair evaluation), in increasing slave order, padding after them.
+"""
+
+import dataclasses
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from jaxcontact import ContactList, Search, Surface, all_to_all, bucket_sort
+from jaxcontact._bucket import contact_jit
+from jaxcontact.scenes import cutting_scene, rough_die_scene
+from tests.helpers import FLOAT, assert_same_contact, gradient_atol
+from tests.test_search import NUM_STEPS, RADIUS, SKIN, surface_at, trajectory
+
+
+def assert_packs(entries: ContactList, dense, num_rows: int):
+    """``entries`` hold exactly the found rows of ``dense``, in order, padding after."""
+    assert isinstance(entries, ContactList)
+    found = np.asarray(entries.found)
+    count = int(found.sum())
+    rows = np.flatnonzero(np.asarray(dense.found))
+    assert count == rows.size > 0
+    assert found[:count].all() and not found[count:].any()  # found entries first
+    np.testing.assert_array_equal(entries.node[:count], rows)  # increasing slave rows
+    for field in ("gap", "xi", "segment", "point", "normal", "active"):
+        np.testing.assert_array_equal(getattr(entries, field)[:count], getattr(dense, field)[rows])
+    # Padding: one past the last slave, no segment, zeros.
+    assert (np.asarray(entries.node[count:]) == num_rows).all()
+    assert (np.asarray(entries.segment[count:]) == -1).all()
+    for field in ("gap", "xi", "point", "normal"):
+        assert not np.asarray(getattr(entries, field)[count:]).any()
+    # Back to N rows, and a scatter-add over the entries drops the padding.
+    for field, want in zip(entries.to_contact(num_rows), dense, strict=True):
+        np.testing.assert_array_equal(field, want)
+    summed = jax.ops.segment_sum(entries.gap, entries.node, num_segments=num_rows)
+    np.testing.assert_array_equal(summed, dense.gap)
+
+
+@pytest.mark.x64_off
+@pytest.mark.parametrize("scene_name", ["cutting", "rough die (cells)"])
+def test_one_call_compact_packs_the_dense_rows_bit_for_bit(scene_name):
+    if scene_name == "cutting":
+        scene = cutting_scene(2_000, 18.0, dtype=FLOAT)
+    else:
+        scene = rough_die_scene(2_000, 200, dtype=FLOAT)
+    num_rows = scene.x.shape[0]
+    # Padding rows hold anything (sentinels), and a masked real contact is not found.
+    mask = np.ones(num_rows, bool)
+    dense = bucket_sort(scene.x, scene.surface, radius=scene.radius)
+    mask[np.flatnonzero(np.asarray(dense.found))[:3]] = False
+    x = np.asarray(scene.x).copy()
+    x[~mask] = np.nan
+    dense = bucket_sort(x, scene.surface, radius=scene.radius, mask=mask)
+    entries = bucket_sort(x, scene.surface, radius=scene.radius, mask=mask, compact=True)
+    assert not bool(entries.overflow)
+    assert_packs(entries, dense, num_rows)
+    assert_same_contact(dense, all_to_all(x, scene.surface, radius=scene.radius, mask=mask))
+
+
+def test_search_compact_in_a_scan_equals_all_to_all_at_every_step():
+    xs, nodes, segments = trajectory(FLOAT)
+    search = Search(radius=RADIUS, skin=SKIN, compact=True)
+    last = search.allocate(xs[-1], surface_at(nodes[-1], segments))
+    state = search.allocate(xs[0], surface_at(nodes[0], segments), at_least=last)
+    # The capacity is measured from the contacts found, not the slaves kept.
+    capacity = state.sizes.contact_capacity
+    assert 0 < capacity < state.sizes.slave_capacity
+
+    def body(state, step):
+        x, at = step
+        entries, state = search.closest(state, x, surface_at(at, segments))
+        return state, entries
+
+    state, entries = jax.jit(lambda state: jax.lax.scan(body, state, (xs, nodes)))(state)
+    assert entries.node.shape == (NUM_STEPS, capacity)
+    assert not bool(state.overflow) and 0 < int(state.rebuilds) < NUM_STEPS
+    expected = jax.vmap(lambda x, at: all_to_all(x, surface_at(at, segments), radius=RADIUS))(
+        xs, nodes
+    )
+    num_rows = xs.shape[1]
+    assert int(expected.found.sum()) > 0
+    for k in range(NUM_STEPS):
+        got = jax.tree.map(lambda field, k=k: field[k], entries).to_contact(num_rows)
+        assert_same_contact(got, jax.tree.map(lambda field, k=k: field[k], expected), RADIUS)
+
+
+def test_too_few_entries_overflow_and_keep_the_first_contacts():
+    scene = cutting_scene(2_000, 18.0, dtype=FLOAT)
+    search = Search(radius=scene.radius, compact=True)
+    state = search.allocate(scene.x, scene.surface)
+    dense = all_to_all(scene.x, scene.surface, radius=scene.radius)
+    assert state.sizes.contact_capacity >= int(dense.found.sum()) > 3
+    small = dataclasses.replace(state.sizes, contact_capacity=3)
+    radius = jnp.asarray(scene.radius, scene.x.dtype)
+    entries = contact_jit(scene.x, scene.surface, radius, None, sizes=small)
+    assert bool(entries.overflow)
+    rows = np.flatnonzero(np.asarray(dense.found))[:3]
+    np.testing.assert_array_equal(entries.node, rows)
+    np.testing.assert_array_equal(entries.segment, dense.segment[rows])
+    # The step carries the flag in the state, as for every other capacity.
+    entries, state = search.closest(dataclasses.replace(state, sizes=small), scene.x, scene.surface)
+    assert bool(entries.overflow) and bool(state.overflow)
+
+
+def test_gradients_through_the_entries_equal_the_dense_ones():
+    scene = cutting_scene(2_000, 18.0, dtype=FLOAT)
+    search = Search(radius=scene.radius, compact=True)
+    state = search.allocate(scene.x, scene.surface)
+
+    def energy(contact):
+        return jnp.sum(contact.gap**2) + jnp.sum(contact.point * contact.normal)
+
+    def compact(x, nodes):
+        surface = Surface(nodes, scene.surface.segments)
+        return energy(search.closest(state, x, surface)[0])
+
+    def dense(x, nodes):
+        return energy(all_to_all(x, Surface(nodes, scene.surface.segments), radius=scene.radius))
+
+    args = (scene.x, scene.surface.nodes)
+    got = jax.jit(jax.grad(compact, argnums=(0, 1)))(*args)
+    want = jax.jit(jax.grad(dense, argnums=(0, 1)))(*args)
+    assert float(jnp.abs(want[0]).sum()) > 0
+    for g, w in zip(got, want, strict=True):
+        assert bool(jnp.all(jnp.isfinite(g)))
+        np.testing.assert_allclose(g, w, atol=gradient_atol(FLOAT))
+
+
+@pytest.mark.x64_off
+def test_compact_misuse_raises_a_clear_error():
+    scene = cutting_scene(2_000, 18.0, dtype=FLOAT)
+    with pytest.raises(ValueError, match="compact=True needs a bucket method"):
+        Search(radius=RADIUS, method="exhaustive", compact=True)
+    with pytest.raises(ValueError, match="compact must be a bool"):
+        Search(radius=RADIUS, compact=1)
+    dense_state = Search(radius=RADIUS).allocate(scene.x, scene.surface)
+    with pytest.raises(ValueError, match="allocated by a dense search; this one is compact"):
+        Search(radius=RADIUS, compact=True).closest(dense_state, scene.x, scene.surface)
