@@ -90,7 +90,7 @@ def cull_blocks(
     low: Array, high: Array, ok: Array, target: Box, block_size: int, capacity: int
 ) -> Blocks:
     """Keeps the blocks with an ``ok`` row whose box ``[low, high]`` meets
-    ``target``, at most ``capacity`` of them.
+    ``target``, at most ``capacity`` of them (``ok=None``: every row may be).
 
     A row's own box, not its block's: one pass of comparisons over the rows,
     where a box per block cost XLA a copy of each coordinate column and
@@ -102,7 +102,9 @@ def cull_blocks(
     """
     num_rows = low.shape[0]
     num_blocks = -(-num_rows // block_size)
-    rows_meet = ok & overlaps(Box(low, high), Box(target.low[None], target.high[None]))
+    rows_meet = overlaps(Box(low, high), Box(target.low[None], target.high[None]))
+    if ok is not None:
+        rows_meet = rows_meet & ok
     meets = _any_per_block(rows_meet, block_size)
     count = jnp.sum(meets, dtype=jnp.int32)
     (kept,) = jnp.nonzero(meets, size=capacity, fill_value=num_blocks)

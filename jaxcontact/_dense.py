@@ -77,7 +77,8 @@ def _lowest(kernel, rows, segments: Segments, slave_ok):
     """i32[N]: per row, the segment of lowest ``kernel``; -1 if no row is real."""
 
     def search(_):
-        return search_all(vmapped(kernel, *rows), segments, slave_ok.shape[0], segments.start.dtype)
+        pair_value = vmapped(kernel, *rows)
+        return search_all(pair_value, segments, slave_ok.shape[0], segments.start.dtype)[0]
 
     return in_stages(jnp.any(slave_ok), [search], [jnp.full(slave_ok.shape, -1, jnp.int32)])
 

@@ -24,8 +24,8 @@ def lowest_score(
     unroll: int = UNROLL,
     block: int = BLOCK,
     steps_needed=None,
-) -> Array:
-    """i32[N]: per row, the segment with the smallest score.
+) -> tuple[Array, Array]:
+    """``(i32[N], f[N])``: per row, the segment with the smallest score, and that score.
 
     Exact ties go to the segment met first; every caller meets each row's
     segments in increasing index order, so that is the lower index. (Carrying
@@ -54,12 +54,13 @@ def lowest_score(
         changes nothing.
 
     Returns:
-      The winning segment per row, ``-1`` where every value is ``inf``.
+      The winning segment per row, ``-1`` where every value is ``inf``, and
+      its score (``inf`` there).
     """
     choice = jnp.full((num_rows,), -1, jnp.int32)
-    if num_steps == 0 or num_rows == 0:
-        return choice
     best = jnp.full((num_rows,), jnp.inf, dtype)
+    if num_steps == 0 or num_rows == 0:
+        return choice, best
     block = num_steps if num_steps <= unroll else block
     num_blocks = -(-num_steps // block)
 
@@ -90,7 +91,7 @@ def lowest_score(
         _, carry = jax.lax.while_loop(
             lambda state: state[0] < blocks_needed, step, (jnp.zeros((), jnp.int32), carry)
         )
-    return carry[1]
+    return carry[1], carry[0]
 
 
 def one_scene_at_a_time(fn):

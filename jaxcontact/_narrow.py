@@ -32,9 +32,10 @@ class Queries(NamedTuple):
     ok: Array  # bool[S]  the row is real
 
 
-def search_all(pair_value, segments: Segments, num_rows: int, dtype) -> Array:
-    """i32[S]: each row against every segment (``all_to_all``, ``swept``, and
-    the bucket sort's kept slaves when there are few segments)."""
+def search_all(pair_value, segments: Segments, num_rows: int, dtype) -> tuple[Array, Array]:
+    """``(i32[S], f[S])``: each row's lowest-scoring segment against every
+    segment, and its score (``all_to_all``, ``swept``, and the bucket sort's
+    kept slaves when there are few segments)."""
 
     # Each segment's own share of the kernel, for all at once (``Edge``).
     edges = edge(segments.start, segments.end)
@@ -50,7 +51,8 @@ def search_all(pair_value, segments: Segments, num_rows: int, dtype) -> Array:
 
 
 def _search_rows(pair_value, segments: Segments, listed: CellLists, capacity: int, dtype):
-    """i32[S]: each row against the segments of its list, up to the fullest list's length."""
+    """``(i32[S], f[S])``: each row against the segments of its list, up to the
+    fullest list's length; the choice and its score."""
 
     def score(slot):
         segment = segment_in_slot(listed, slot)
@@ -74,8 +76,8 @@ def _search_rows(pair_value, segments: Segments, listed: CellLists, capacity: in
 
 
 def search_listed(kernel, rows, segments: Segments, listed: CellLists, sizes: Sizes):
-    """i32[S]: each kept slave against the segments of its cell, at most
-    ``sizes.cell_capacity`` slots.
+    """``(i32[S], f[S])``: each kept slave against the segments of its cell, at
+    most ``sizes.cell_capacity`` slots; the choice and its score.
 
     ``kernel(*row, segment)`` scores a pair; ``rows`` are the kept slaves' f[S, ...]
     arrays. A row costs as many slots as the fullest list it is searched
@@ -106,7 +108,7 @@ def search_listed(kernel, rows, segments: Segments, listed: CellLists, sizes: Si
     longest = count[::chunk_rows]  # each chunk's longest list comes first
 
     def search_chunk(state):
-        chunk, choice = state
+        chunk, found = state
         at = chunk * chunk_rows
 
         def part(values):
@@ -115,19 +117,26 @@ def search_listed(kernel, rows, segments: Segments, listed: CellLists, sizes: Si
         lists = CellLists(part(first), part(count), listed.order)
         pair_value = vmapped(kernel, *map(part, rows))
         chosen = _search_rows(pair_value, segments, lists, capacity, dtype)
-        return chunk + 1, jax.lax.dynamic_update_slice_in_dim(choice, chosen, at, 0)
+        found = tuple(
+            jax.lax.dynamic_update_slice_in_dim(whole, new, at, 0)
+            for whole, new in zip(found, chosen, strict=True)
+        )
+        return chunk + 1, found
 
     def more(state):
         chunk = jnp.minimum(state[0], num_chunks - 1)
         return (state[0] < num_chunks) & (longest[chunk] > 0)
 
-    choice = jnp.full((num_chunks * chunk_rows,), -1, jnp.int32)
-    _, choice = jax.lax.while_loop(more, search_chunk, (jnp.zeros((), jnp.int32), choice))
-    return jnp.full((num_rows,), -1, jnp.int32).at[order].set(choice[:num_rows])
+    padded = num_chunks * chunk_rows
+    found = (jnp.full((padded,), -1, jnp.int32), jnp.full((padded,), jnp.inf, dtype))
+    _, (choice, best) = jax.lax.while_loop(more, search_chunk, (jnp.zeros((), jnp.int32), found))
+    choice = jnp.full((num_rows,), -1, jnp.int32).at[order].set(choice[:num_rows])
+    return choice, jnp.full((num_rows,), jnp.inf, dtype).at[order].set(best[:num_rows])
 
 
 def choose(queries: Queries, segments: Segments, boxes: Box, kernel, sizes: Sizes, listed=None):
-    """i32[S] chosen segment of each kept slave, and whether the cells overflowed.
+    """``((i32[S], f[S]), bool[])``: the chosen segment of each kept slave and
+    its score, and whether the cells overflowed.
 
     Pairs are scored by ``kernel(*row, segment)`` over ``queries.rows``. Rows
     that are not ``ok`` may hold any choice; the caller masks them.

@@ -321,11 +321,9 @@ class Search:
         if not self.compact:
             return dataclasses.replace(sizes, contact_capacity=0)
         radius = jnp.asarray(self.radius, x.dtype)
-        wide = _bucket.room_for_every_slot(sizes)
 
         def count(x, surface, mask):
-            found = _bucket.contact_jit(x, surface, radius, mask, sizes=wide).found
-            return jnp.sum(found, dtype=jnp.int32)
+            return _bucket.entries_needed(x, surface, radius, mask, sizes)
 
         if axes is not None:
             count = jax.vmap(count, axes)

@@ -54,14 +54,15 @@ class ContactList(NamedTuple):
 
     The compact form of ``Contact`` (as jax-md's ``Sparse`` neighbour lists
     beside ``Dense``): entry ``j`` says that slave ``node[j]`` touches
-    segment ``segment[j]``, with the same gap, xi, point and normal as row
-    ``node[j]`` of the ``Contact``. Found entries come first, in increasing
-    ``node``; the entries after them are padding: ``node = N`` (one past the
-    last slave, so ``x.at[node].add(f)`` and ``jax.ops.segment_sum(f, node,
-    N)`` drop them), ``segment = -1``, zeros elsewhere, ``found`` False. The
-    capacity ``K`` is static (``Search(compact=True)`` measures it at
-    ``allocate``); ``overflow`` is True when more contacts were found than
-    it holds, and then some are missing.
+    segment ``segment[j]``, with the gap, xi, point and normal of row
+    ``node[j]`` of the ``Contact`` (equal to rounding: the last bit may
+    differ). Found entries come first, in increasing ``node``; the entries
+    after them are padding: ``node = N`` (one past the last slave, so
+    ``x.at[node].add(f)`` and ``jax.ops.segment_sum(f, node, N)`` drop
+    them), ``segment = -1``, zeros elsewhere, ``found`` False. The capacity
+    ``K`` is static (``Search(compact=True)`` measures it at ``allocate``);
+    ``overflow`` is True when more contacts were found than it holds, and
+    then some are missing.
     """
 
     node: Array  # i32[K]  slave row of each entry; N in padding entries

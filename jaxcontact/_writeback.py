@@ -45,9 +45,7 @@ def pack_found(result: Contact, rows: Array, capacity: int, num_rows: int) -> Co
     into ``capacity`` entries, in increasing slot order, as a ``ContactList``.
 
     ``rows`` (i32[S], increasing where real) is each slot's slave row. The
-    entries are gathered from the rows the dense form would write, so a
-    found entry equals its row of the dense ``Contact`` bit for bit; the N
-    rows are never written (on the cutting scene at 10^6 rows the dense
+    N rows are never written (on the cutting scene at 10^6 rows the dense
     write-back was 40 % of the call: ``benchmarks/stages.py``).
     """
     num_slots = result.found.shape[0]

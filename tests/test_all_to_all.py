@@ -87,7 +87,7 @@ def test_first_index_wins_a_tie_across_segment_blocks():
             return pair_value(x, edge(starts[k], ends[k])), jnp.broadcast_to(k, x.shape[:1])
 
         every = jax.vmap(pair_value, in_axes=(None, 0))(x, edge(starts, ends))
-        choice = lowest_score(score, len(starts), len(x), x.dtype, unroll=4, block=4)
+        choice, _ = lowest_score(score, len(starts), len(x), x.dtype, unroll=4, block=4)
         return choice, every
 
     choice, every = map(np.asarray, lowest(scene.x, starts, ends))

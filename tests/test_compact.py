@@ -1,8 +1,10 @@
 """The compact result (``ContactList``): the found rows of the dense ``Contact``, packed.
 
 Every test compares it with the dense form: entry by entry, the rows the
-dense ``Contact`` reports as found, bit for bit (both come from the same
-compiled pair evaluation), in increasing slave order, padding after them.
+dense ``Contact`` reports as found, in increasing slave order, padding after
+them: the same slaves and segments, values equal to rounding (the compact
+program assembles only the slaves it may find, and XLA fuses that pair
+evaluation differently: the last bit may differ).
 """
 
 import dataclasses
@@ -15,7 +17,7 @@ import pytest
 from jaxcontact import ContactList, Search, Surface, all_to_all, bucket_sort
 from jaxcontact._bucket import contact_jit
 from jaxcontact.scenes import cutting_scene, rough_die_scene
-from tests.helpers import FLOAT, assert_same_contact, gradient_atol
+from tests.helpers import FLOAT, assert_same_contact, binned_tolerance, gradient_atol
 from tests.test_search import NUM_STEPS, RADIUS, SKIN, surface_at, trajectory
 
 
@@ -28,8 +30,12 @@ def assert_packs(entries: ContactList, dense, num_rows: int):
     assert count == rows.size > 0
     assert found[:count].all() and not found[count:].any()  # found entries first
     np.testing.assert_array_equal(entries.node[:count], rows)  # increasing slave rows
-    for field in ("gap", "xi", "segment", "point", "normal", "active"):
+    tol = binned_tolerance(dense.gap.dtype, dense.point)
+    for field in ("segment", "active"):
         np.testing.assert_array_equal(getattr(entries, field)[:count], getattr(dense, field)[rows])
+    for field in ("gap", "xi", "point", "normal"):
+        got, want = getattr(entries, field)[:count], getattr(dense, field)[rows]
+        np.testing.assert_allclose(got, want, rtol=0, atol=tol)
     # Padding: one past the last slave, no segment, zeros.
     assert (np.asarray(entries.node[count:]) == num_rows).all()
     assert (np.asarray(entries.segment[count:]) == -1).all()
@@ -37,14 +43,14 @@ def assert_packs(entries: ContactList, dense, num_rows: int):
         assert not np.asarray(getattr(entries, field)[count:]).any()
     # Back to N rows, and a scatter-add over the entries drops the padding.
     for field, want in zip(entries.to_contact(num_rows), dense, strict=True):
-        np.testing.assert_array_equal(field, want)
+        np.testing.assert_allclose(field, want, rtol=0, atol=tol)
     summed = jax.ops.segment_sum(entries.gap, entries.node, num_segments=num_rows)
-    np.testing.assert_array_equal(summed, dense.gap)
+    np.testing.assert_allclose(summed, dense.gap, rtol=0, atol=tol)
 
 
 @pytest.mark.x64_off
 @pytest.mark.parametrize("scene_name", ["cutting", "rough die (cells)"])
-def test_one_call_compact_packs_the_dense_rows_bit_for_bit(scene_name):
+def test_one_call_compact_packs_the_dense_rows(scene_name):
     if scene_name == "cutting":
         scene = cutting_scene(2_000, 18.0, dtype=FLOAT)
     else:
@@ -142,3 +148,25 @@ def test_compact_misuse_raises_a_clear_error():
     dense_state = Search(radius=RADIUS).allocate(scene.x, scene.surface)
     with pytest.raises(ValueError, match="allocated by a dense search; this one is compact"):
         Search(radius=RADIUS, compact=True).closest(dense_state, scene.x, scene.surface)
+
+
+@pytest.mark.x64_off
+def test_slaves_at_the_radius_to_within_rounding_are_found_as_the_dense_form_finds_them():
+    # Long segments (the rounding grows with them) and slaves a few ulps either
+    # side of the radius, beside the faces and beyond the ends: the compact form
+    # assembles every slave the dense form may find, whatever the rounding.
+    radius, length = 0.1, 1_000.0
+    eps = float(np.finfo(FLOAT).eps)
+    nodes = np.array([[0.0, 0.0], [length, 0.0], [length, length]], FLOAT)
+    surface = Surface(jnp.asarray(nodes), jnp.asarray([[0, 1], [1, 2]], jnp.int32))
+    ulps = np.arange(-40, 41)
+    along = np.linspace(1.0, length - 1.0, ulps.size)
+    beside = np.stack([along, -radius * (1 + ulps * eps)], axis=-1)  # below the first face
+    beyond = np.stack([-radius * (1 + ulps * eps), np.zeros(ulps.size)], axis=-1)  # before a
+    x = jnp.asarray(np.concatenate([beside, beyond]), FLOAT)
+    dense = bucket_sort(x, surface, radius=radius)
+    entries = bucket_sort(x, surface, radius=radius, compact=True)
+    found = np.asarray(dense.found)
+    assert 0 < found.sum() < found.size  # some in, some out
+    np.testing.assert_array_equal(entries.to_contact(x.shape[0]).found, found)
+    np.testing.assert_array_equal(entries.node[: found.sum()], np.flatnonzero(found))
