@@ -21,6 +21,8 @@ median and 10th-90th percentile, every call ended by ``block_until_ready``;
   allocated at ``x`` and called on that same ``x``, so the skin rule holds
   and the candidates are kept; the state goes in and out of the jitted step,
   as in a simulation (``benchmarks/search_step.py``'s (b));
+- the same two with the compact result (``compact=True``: a ``ContactList``
+  of the found contacts, its capacity measured outside the timer);
 - ``all_to_all``: only where ``N * M <= 2 10^8`` pairs (10 ns a pair on one
   core of this project's machine: 2 s a call at most); elsewhere its row
   says "not run";
@@ -74,15 +76,18 @@ import jax
 import numpy as np
 
 from jaxcontact import Search, all_to_all
+from jaxcontact._bucket import measure_contacts
 from jaxcontact._sizes import measure
 from jaxcontact.bench import _run, baselines, oracle
 from jaxcontact.scenes import rough_die_scene
 
 LIBRARY = "bucket_sort (sized)"
+COMPACT = "bucket_sort (sized, compact)"
 SEARCH = "Search.closest (reused state)"
+COMPACT_SEARCH = "Search.closest (compact, reused state)"
 DENSE = "all_to_all"
 NUMBA = "numba grid (1 thread)"
-METHODS = (LIBRARY, SEARCH, DENSE, NUMBA)
+METHODS = (LIBRARY, COMPACT, SEARCH, COMPACT_SEARCH, DENSE, NUMBA)
 SKIN = 0.01  # benchmarks/search_step.py's skin on the rough die: half the radius
 PAIR_BUDGET = 2e8  # all_to_all's slave-segment pairs per call, at most
 TARGET_COMPILE_S = 1.0  # issue 15: compile time per shape
@@ -125,11 +130,14 @@ def methods(scene, names=METHODS) -> dict:
     x, surface, radius = scene.x, scene.surface, scene.radius
     pairs = x.shape[0] * surface.segments.shape[0]
 
-    def sized():
-        return _run.sized_contact(radius, measure(x, surface, radius=radius)), (x, surface)
+    def sized(compact=False):
+        sizes = measure(x, surface, radius=radius)
+        if compact:
+            sizes = measure_contacts(x, surface, radius, None, sizes, slack=1.5)
+        return _run.sized_contact(radius, sizes), (x, surface)
 
-    def reused():
-        search = Search(radius=radius, skin=SKIN)
+    def reused(compact=False):
+        search = Search(radius=radius, skin=SKIN, compact=compact)
         return jax.jit(search.closest), (search.allocate(x, surface), x, surface)
 
     def dense():
@@ -143,6 +151,7 @@ def methods(scene, names=METHODS) -> dict:
         return baselines.unavailable(NUMBA) or prepare(np.asarray(x), start, end, radius)
 
     built = {LIBRARY: sized, SEARCH: reused, DENSE: dense, NUMBA: numba}
+    built |= {COMPACT: lambda: sized(True), COMPACT_SEARCH: lambda: reused(True)}
     return {name: built[name]() for name in names}
 
 
