@@ -198,7 +198,7 @@ def _rounding_reach(segments: Segments, radius):
     return radius + 64 * eps * (radius + 4 * longest)
 
 
-def _assemble_near(kept, ok, rows, segments: Segments, chosen, radius, capacity: int):
+def _assemble_near(kept, ok, rows, segments: Segments, chosen, radius, capacity: int, num_rows):
     """``(Contact, i32[K] rows, i32[] needed)`` of the kept slaves that can be found.
 
     Only slaves whose score says they may lie within the radius (within
@@ -209,7 +209,7 @@ def _assemble_near(kept, ok, rows, segments: Segments, chosen, radius, capacity:
     evaluation differently). ``rows`` are their slave rows, N past the end.
     """
     (choice, best), overflow = chosen
-    num_rows, num_slots = kept.shape[0], ok.shape[0]
+    num_slots = ok.shape[0]
     reach = _rounding_reach(segments, radius)
     near = ok & (choice >= 0) & (best <= reach * reach)
     needed = jnp.sum(near, dtype=jnp.int32)
@@ -278,7 +278,7 @@ def _contact(
     go, chosen = _searched(queries, blocks, segments, boxes, listed, how)
 
     def assemble_near(chosen):
-        return _assemble_near(kept, ok, blocks.rows, segments, chosen, radius, compact)
+        return _assemble_near(kept, ok, blocks.rows, segments, chosen, radius, compact, num_rows)
 
     def pack(near):
         part, rows, needed = near

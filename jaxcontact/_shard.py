@@ -96,6 +96,11 @@ def sharded(detector, mesh: Mesh, *, axis: str | None = None):
     num_shards = mesh.shape[axis]
 
     def run(*args, mask: Array | None = None, **kwargs):
+        if kwargs.get("compact"):
+            raise ValueError(
+                "sharded(...) returns the dense Contact: compact=True is not supported "
+                "(search the sharded arrays with Search(compact=True) instead)"
+            )
         *points, surface = args
         if not points:
             raise ValueError("sharded(detector) needs the slave arrays before the surface")

@@ -14,7 +14,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxcontact import ContactList, Search, Surface, all_to_all, bucket_sort
+from jaxcontact import ContactList, Search, Surface, all_to_all, bucket_sort, sharded
 from jaxcontact._bucket import contact_jit
 from jaxcontact.scenes import cutting_scene, rough_die_scene
 from tests.helpers import FLOAT, assert_same_contact, binned_tolerance, gradient_atol
@@ -145,6 +145,9 @@ def test_compact_misuse_raises_a_clear_error():
         Search(radius=RADIUS, method="exhaustive", compact=True)
     with pytest.raises(ValueError, match="compact must be a bool"):
         Search(radius=RADIUS, compact=1)
+    mesh = jax.make_mesh((1,), ("d",))
+    with pytest.raises(ValueError, match="compact=True is not supported"):
+        sharded(bucket_sort, mesh)(scene.x, scene.surface, radius=RADIUS, compact=True)
     dense_state = Search(radius=RADIUS).allocate(scene.x, scene.surface)
     with pytest.raises(ValueError, match="allocated by a dense search; this one is compact"):
         Search(radius=RADIUS, compact=True).closest(dense_state, scene.x, scene.surface)

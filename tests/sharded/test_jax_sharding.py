@@ -108,6 +108,8 @@ def _detect(groups, x_prev, x, surface, mask, *, jit: bool) -> dict:
     if "bucket_sort" in groups:
         found["bucket_sort"] = bucket_sort(x, surface, radius=RADIUS, mask=mask)
         found["bucket_swept"] = bucket_swept(x_prev, x, surface, mask=mask)
+        compact = bucket_sort(x, surface, radius=RADIUS, mask=mask, compact=True)
+        found["bucket_sort compact"] = compact
     if "Search binned" in groups:
         states["binned"] = binned.allocate(x, surface, x_prev=x_prev, mask=mask)
     if "Search with a skin" in groups:
@@ -185,6 +187,14 @@ def test_sharded_arrays_give_the_single_device_answer(case: Case):
     if "gradient" in found:
         atol = local_atol(case.dtype, scale=4.0)
         np.testing.assert_allclose(found.pop("gradient"), gradient, rtol=0, atol=atol)
+    entries = found.pop("bucket_sort compact", None)
+    if entries is not None:  # a ContactList: its K entries come back replicated
+        assert not bool(entries.overflow)
+        _assert_same("bucket_sort compact", entries.to_contact(case.num_slaves), contact)
+        if case.axis_type is EXPLICIT:
+            whole = NamedSharding(mesh, P())
+            for value in entries:
+                assert value.sharding.is_equivalent_to(whole, value.ndim), value.sharding
     assert not any(bool(result.overflow) for result in found.values())
     for name, result in found.items():
         _assert_same(name, result, crossing if "swept" in name else contact)
