@@ -194,3 +194,19 @@ def test_readme_compact_snippet_gives_the_dense_forces():
     want = jnp.where(dense.active, -10.0 * dense.gap, 0)[:, None] * dense.normal
     tol = binned_tolerance(dense.gap.dtype, dense.point) * 10.0
     np.testing.assert_allclose(namespace["nodal"], want, rtol=0, atol=tol)
+
+
+def test_a_batch_is_allocated_once_and_searched_under_vmap():
+    xs, nodes, segments = trajectory(jnp.float32, steps=3, x_tip=19.0)
+    surfaces = Surface(nodes, jnp.broadcast_to(segments, (3,) + segments.shape))
+    search = Search(radius=RADIUS, skin=SKIN, compact=True)
+    state = search.allocate(xs, surfaces)  # one capacity: the largest count of the batch
+    entries, state = jax.jit(jax.vmap(search.closest))(state, xs, surfaces)
+    dense = jax.vmap(lambda x, s: all_to_all(x, s, radius=RADIUS))(xs, surfaces)
+    counts = np.asarray(dense.found.sum(axis=1))
+    assert entries.node.shape == (3, state.sizes.contact_capacity) and counts.min() > 0
+    assert state.sizes.contact_capacity >= counts.max()
+    assert not bool(jnp.any(state.overflow))
+    for b in range(3):
+        got = jax.tree.map(lambda field, b=b: field[b], entries).to_contact(xs.shape[1])
+        assert_same_contact(got, jax.tree.map(lambda field, b=b: field[b], dense), RADIUS)
