@@ -133,7 +133,8 @@ class Search:
       chunk_rows: kept slaves searched together, fullest cells first.
       compact: ``closest`` returns the found contacts only, as a
         ``ContactList`` whose capacity ``allocate`` measures (the contacts
-        found then, times ``slack``), instead of a ``Contact`` of N rows.
+        found then, and any slave at the radius to within rounding, times
+        ``slack``), instead of a ``Contact`` of N rows.
         Faster where few slaves touch (the N rows are never written), and
         what a force assembly by ``segment_sum`` over the contacts wants.
         Not for the ``"exhaustive"`` method, nor for ``swept``.

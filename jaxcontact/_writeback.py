@@ -41,8 +41,9 @@ def empty_contact_list(capacity: int, num_rows: int, dtype, overflow: Array) -> 
 
 
 def pack_found(result: Contact, rows: Array, capacity: int, num_rows: int) -> ContactList:
-    """The ``found`` rows of ``result`` (the S kept slaves' ``Contact``) packed
-    into ``capacity`` entries, in increasing slot order, as a ``ContactList``.
+    """The ``found`` rows of ``result`` (a ``Contact`` of S slots: the kept
+    slaves that may be found) packed into ``capacity`` entries, in increasing
+    slot order, as a ``ContactList``.
 
     ``rows`` (i32[S], increasing where real) is each slot's slave row. The
     N rows are never written (on the cutting scene at 10^6 rows the dense
