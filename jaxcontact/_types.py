@@ -61,8 +61,9 @@ class ContactList(NamedTuple):
     ``x.at[node].add(f)`` and ``jax.ops.segment_sum(f, node, N)`` drop
     them), ``segment = -1``, zeros elsewhere, ``found`` False. The capacity
     ``K`` is static (``Search(compact=True)`` measures it at ``allocate``);
-    ``overflow`` is True when more contacts were found than it holds, and
-    then some are missing.
+    ``overflow`` is True when more entries were needed than it holds (the
+    contacts found, and any slave at the radius to within rounding), and
+    then some contacts may be missing.
     """
 
     node: Array  # i32[K]  slave row of each entry; N in padding entries
