@@ -27,6 +27,7 @@ from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from jaxcontact import _inputs
 from jaxcontact._assemble import contact_from_choice, crossing_from_choice
@@ -44,6 +45,7 @@ from jaxcontact._writeback import (
     empty_contact,
     empty_contact_list,
     empty_crossing,
+    first_slots,
     pack_found,
     write_blocks,
 )
@@ -209,13 +211,8 @@ def _assemble_near(kept, ok, rows, segments: Segments, chosen, radius, capacity:
     evaluation differently). ``rows`` are their slave rows, N past the end.
     """
     (choice, best), overflow = chosen
-    num_slots = ok.shape[0]
     reach = _rounding_reach(segments, radius)
-    near = ok & (choice >= 0) & (best <= reach * reach)
-    needed = jnp.sum(near, dtype=jnp.int32)
-    (slots,) = jnp.nonzero(near, size=capacity, fill_value=num_slots)
-    valid = slots < num_slots
-    at = jnp.minimum(slots, num_slots - 1)
+    at, valid, needed = first_slots(ok & (choice >= 0) & (best <= reach * reach), capacity)
     x = jnp.where(valid[:, None], kept[at], 0)
     choice = jnp.where(valid, choice[at], -1)
     overflow = overflow | (needed > capacity)
@@ -350,10 +347,19 @@ def entries_needed(x, surface, radius, mask, sizes: Sizes) -> Array:
     return contact_jit(x, surface, radius, mask, sizes=wide, with_needed=True)[1]
 
 
-def measure_contacts(x, surface, radius, mask, sizes: Sizes, slack: float) -> Sizes:
+def measure_contacts(x, surface, radius, mask, sizes: Sizes, slack: float, axes=None) -> Sizes:
     """``sizes`` with the compact form's capacity: the entries needed now times
-    ``slack`` (at least 1), as ``measure`` sizes the rest (concrete inputs)."""
-    needed = int(entries_needed(x, surface, jnp.asarray(radius, x.dtype), mask, sizes))
+    ``slack`` (at least 1), as ``measure`` sizes the rest (concrete inputs).
+    With ``axes`` (``vmap``'s ``in_axes`` of ``x, surface, mask``), the
+    largest need of a batch."""
+    radius = jnp.asarray(radius, x.dtype)
+
+    def count(x, surface, mask):
+        return entries_needed(x, surface, radius, mask, sizes)
+
+    if axes is not None:
+        count = jax.vmap(count, axes)
+    needed = int(np.max(np.asarray(count(x, surface, mask))))
     return dataclasses.replace(sizes, contact_capacity=grow(needed, slack))
 
 

@@ -23,15 +23,7 @@ import numpy as np
 
 from jaxcontact import _bucket, _dense, _inputs
 from jaxcontact._placement import replicated, searched_whole
-from jaxcontact._sizes import (
-    CELLS_ABOVE,
-    CHUNK_ROWS,
-    Sizes,
-    grow,
-    largest,
-    measure,
-    measure_batch,
-)
+from jaxcontact._sizes import CELLS_ABOVE, CHUNK_ROWS, Sizes, largest, measure, measure_batch
 from jaxcontact._types import Array, Contact, ContactList, Crossing, Surface
 
 METHODS = ("auto", "binned", "dense", "exhaustive")
@@ -321,16 +313,8 @@ class Search:
         (the dense form) for a search that is not compact."""
         if not self.compact:
             return dataclasses.replace(sizes, contact_capacity=0)
-        radius = jnp.asarray(self.radius, x.dtype)
-
-        def count(x, surface, mask):
-            return _bucket.entries_needed(x, surface, radius, mask, sizes)
-
-        if axes is not None:
-            count = jax.vmap(count, axes)
-        counts = count(x, surface, mask)
-        measured = dataclasses.replace(
-            sizes, contact_capacity=grow(int(np.max(np.asarray(counts))), self.slack)
+        measured = _bucket.measure_contacts(
+            x, surface, self.radius, mask, sizes, self.slack, axes=axes
         )
         return self._merged(measured, at_least, "sizes")
 

@@ -40,6 +40,20 @@ def empty_contact_list(capacity: int, num_rows: int, dtype, overflow: Array) -> 
     )
 
 
+def first_slots(flags: Array, capacity: int) -> tuple[Array, Array, Array]:
+    """``(at, valid, count)``: the first ``capacity`` slots where ``flags``
+    (bool[S]) is True, in increasing order.
+
+    ``at`` (i32[capacity]) indexes them, clamped into ``[0, S)`` past the
+    last one so that it may gather; ``valid`` says which are real;
+    ``count`` (i32[]) is how many flags were True, ``capacity`` or more.
+    """
+    num_slots = flags.shape[0]
+    count = jnp.sum(flags, dtype=jnp.int32)
+    (slots,) = jnp.nonzero(flags, size=capacity, fill_value=num_slots)
+    return jnp.minimum(slots, max(num_slots - 1, 0)), slots < num_slots, count
+
+
 def pack_found(result: Contact, rows: Array, capacity: int, num_rows: int) -> ContactList:
     """The ``found`` rows of ``result`` (a ``Contact`` of S slots: the kept
     slaves that may be found) packed into ``capacity`` entries, in increasing
@@ -49,11 +63,7 @@ def pack_found(result: Contact, rows: Array, capacity: int, num_rows: int) -> Co
     N rows are never written (on the cutting scene at 10^6 rows the dense
     write-back was 40 % of the call: ``benchmarks/stages.py``).
     """
-    num_slots = result.found.shape[0]
-    count = jnp.sum(result.found, dtype=jnp.int32)
-    (slots,) = jnp.nonzero(result.found, size=capacity, fill_value=num_slots)
-    valid = slots < num_slots
-    at = jnp.minimum(slots, max(num_slots - 1, 0))
+    at, valid, count = first_slots(result.found, capacity)
 
     def take(values, fill):
         shape = valid.shape + (1,) * (values.ndim - 1)
