@@ -14,41 +14,9 @@ import jax.numpy as jnp
 
 from jaxcontact._geometry import cross_sign, dot, path_hit, project, unit_normal
 from jaxcontact._inputs import Segments
-from jaxcontact._sort import stable_order
+from jaxcontact._outline import vertex_neighbours
+from jaxcontact._pairs import allows, pick
 from jaxcontact._types import Array, Contact, Crossing
-
-
-def _first_match(keys: Array, wanted: Array, exclude: Array, num_values: int) -> Array:
-    """i32[M]: per k, the lowest j != exclude[k] with keys[j] == wanted[k], or -1.
-
-    ``keys`` lie in ``[-1, num_values - 1)``.
-    """
-    order = stable_order(keys + 1, num_values)
-    ordered = keys[order]
-    last = keys.shape[0] - 1
-    at = jnp.minimum(jnp.searchsorted(ordered, wanted), last)
-    # Skip over the excluded segment itself when it sorts first.
-    skip = (order[at] == exclude) & (at < last)
-    at = jnp.where(skip, at + 1, at)
-    match = (ordered[at] == wanted) & (order[at] != exclude)
-    return jnp.where(match, order[at], -1).astype(jnp.int32)
-
-
-def vertex_neighbours(segments: Segments) -> tuple[Array, Array]:
-    """``(before, after)``, i32[M] each: a segment ending at k's start node, one
-    starting at k's end node (the lowest such index), -1 where none.
-
-    O(M log M), by sorting the node indices: no M x M table.
-    """
-    index = jnp.arange(segments.indices.shape[0], dtype=jnp.int32)
-    ok = segments.ok
-    # Segments that are not real (padding, masked, degenerate) match nothing,
-    # so padding can never change a real row: keys -1, wanted -2.
-    starts, ends = segments.indices[:, 0], segments.indices[:, 1]
-    num_values = segments.num_nodes + 1
-    before = _first_match(jnp.where(ok, ends, -1), jnp.where(ok, starts, -2), index, num_values)
-    after = _first_match(jnp.where(ok, starts, -1), jnp.where(ok, ends, -2), index, num_values)
-    return before, after
 
 
 def _on_chosen(kernel, x: Array, segments: Segments, choice: Array):
@@ -56,8 +24,10 @@ def _on_chosen(kernel, x: Array, segments: Segments, choice: Array):
     return jax.vmap(kernel)(x, segments.start[index], segments.end[index])
 
 
-def prefer_outside(x: Array, segments: Segments, choice: Array) -> tuple[Array, Array]:
-    """``(choice, sign)``: vertex ties given to the face that decides the gap's sign.
+def prefer_outside(
+    x: Array, segments: Segments, choice: Array, rule=None, row_tags=None
+) -> tuple[Array, Array, Array]:
+    """``(choice, sign, vertex)``: vertex ties given to the face that decides the gap's sign.
 
     The search gives exact ties to the lower index. Where the chosen closest
     point is a node v shared with the neighbouring segment, both are at the
@@ -71,6 +41,14 @@ def prefer_outside(x: Array, segments: Segments, choice: Array) -> tuple[Array, 
     tip) as penetrating, and slaves inside a sharp concave notch as outside
     (docs/contract.md, "Changes from the first contract"). Only
     neighbours that share the node index are seen.
+
+    Only a neighbour the pair rule allows for the slave (``_pairs.allows``)
+    is a rival.
+
+    ``vertex`` (i32[N]) is the node at the closest point when it is an end
+    of the chosen segment, decided by the sign tests that clamp ``xi``
+    (``_geometry._offset``), and -1 on the face's interior: the tie keeps
+    the node, whichever face it picks.
 
     ``sign`` (f[N]) is the gap's sign at a vertex tie (+1 or -1; 0 where
     there is no tie). It is decided from the signs of the cross products
@@ -105,16 +83,28 @@ def prefer_outside(x: Array, segments: Segments, choice: Array) -> tuple[Array, 
     rival_key = jax.vmap(dot)(offset, normal[rival])
     better = jnp.where(convex, rival_key > own_key, rival_key < own_key)
     tied = (choice >= 0) & (other >= 0) & segments.ok[rival]
+    if rule is not None:
+        tied = tied & allows(rule, row_tags, pick(segments.tags, rival))
     own_side = jax.vmap(cross_sign)(offset, d)
     rival_side = jax.vmap(cross_sign)(offset, rival_d)
     larger, smaller = jnp.maximum(own_side, rival_side), jnp.minimum(own_side, rival_side)
     inside = jnp.where(convex, larger < 0, smaller < 0)
     sign = jnp.where(tied, jnp.where(inside, -1, 1), 0).astype(x.dtype)
-    return jnp.where(tied & better, other, choice), sign
+    ends = segments.indices[index]
+    vertex = jnp.where(at_end, ends[:, 1], jnp.where(at_start, ends[:, 0], -1))
+    vertex = jnp.where(choice >= 0, vertex, -1).astype(jnp.int32)
+    return jnp.where(tied & better, other, choice), sign, vertex
 
 
 def contact_from_choice(
-    x: Array, segments: Segments, choice: Array, radius: Array, overflow: Array, row_ok: Array
+    x: Array,
+    segments: Segments,
+    choice: Array,
+    radius: Array,
+    overflow: Array,
+    row_ok: Array,
+    rule=None,
+    row_tags=None,
 ) -> Contact:
     """Builds the ``Contact`` of slaves ``x`` (f[N, 2], bad rows zeroed).
 
@@ -123,16 +113,19 @@ def contact_from_choice(
       segments: the resolved master segments.
       choice: i32[N] chosen segment per slave, -1 for none; vertex ties are
         settled here (``prefer_outside``).
-      radius: f[] search radius.
+      radius: f[] search radius, or f[N] one per slave.
       overflow: bool[] passed through.
       row_ok: bool[N] real rows; the others are reported not found.
+      rule: the pair rule (``_pairs.Rule``) the search applied, or None, and
+      row_tags: the slaves' tags it read: the vertex tie rule asks it too.
     """
     choice = jax.lax.stop_gradient(choice)
     if segments.ok.shape[0] == 0:
-        choice = jnp.full(choice.shape, -1, jnp.int32)
+        choice = vertex = jnp.full(choice.shape, -1, jnp.int32)
         projection = jax.vmap(project)(x, jnp.zeros_like(x), jnp.zeros_like(x))
     else:
-        choice, sign = jax.lax.stop_gradient(prefer_outside(x, segments, choice))
+        tie = prefer_outside(x, segments, choice, rule, row_tags)
+        choice, sign, vertex = jax.lax.stop_gradient(tie)
         projection = _on_chosen(project, x, segments, choice)
         tied_gap = sign * jnp.abs(projection.gap)
         projection = projection._replace(gap=jnp.where(sign != 0, tied_gap, projection.gap))
@@ -149,6 +142,7 @@ def contact_from_choice(
         segment=jnp.where(found, choice, -1).astype(jnp.int32),
         point=keep(projection.point),
         normal=keep(projection.normal),
+        vertex=jnp.where(found, vertex, -1),
         found=found,
         active=found & (gap < 0),
         overflow=overflow,

@@ -33,11 +33,13 @@ from jaxcontact import _inputs
 from jaxcontact._assemble import contact_from_choice, crossing_from_choice
 from jaxcontact._broad import Blocks, broad_phase, conservative_margin, kept_rows, segment_boxes
 from jaxcontact._cells import CellLists, list_candidates
+from jaxcontact._dense import path_lengths
 from jaxcontact._geometry import first_hit_time, squared_distance
-from jaxcontact._inputs import Segments
+from jaxcontact._inputs import Segments, reach_of
 from jaxcontact._lowest import one_scene_at_a_time
 from jaxcontact._narrow import Queries, choose, in_stages
 from jaxcontact._padded import cut_entries, cut_rows, pad_scene
+from jaxcontact._pairs import NO_PAIRING, Pairing, pick, ruled, tag
 from jaxcontact._placement import searched_whole
 from jaxcontact._sizes import CELLS_ABOVE, Sizes, grow, measure
 from jaxcontact._types import Array, Contact, ContactList, Crossing, Surface
@@ -60,16 +62,28 @@ class Candidates(NamedTuple):
     reference: Array  # f[N, 2]  slave positions when found
     nodes: Array  # f[P, 2]  master node positions when found
     row_ok: Array  # bool[N]  the rows that were real when found
-    segment_ok: Array  # bool[M]  the segments that were real when found
+    segment_ok: Array  # bool[M]  the segments that were real, or in the pool, when found
     indices: Array  # i32[M, 2]  the segments' node indices when found
     overflow: Array  # bool[]  the sizes were too small when they were found
+    pool: Array | None = None  # bool[M]  segments listed while masked, that may switch on
+
+
+# Why candidates were found again (``expired``; ``SearchState.last_rebuild``), bit by bit.
+MOVED, NEW_ROWS, NEW_SEGMENTS, REJOINED = 1, 2, 4, 8
+REBUILD_REASONS = {
+    MOVED: "the slaves and the master moved more than the skin",
+    NEW_ROWS: "a slave row became real",
+    NEW_SEGMENTS: "a segment outside the pool became real",
+    REJOINED: "a real segment was joined to other nodes",
+}
 
 
 @searched_whole(rows="x")
-def find(x, surface: Surface, reach, mask, sizes: Sizes) -> Candidates:
-    """``Candidates`` within ``reach`` (the radius plus the skin)."""
+def find(x, surface: Surface, reach, mask, sizes: Sizes, pool=None) -> Candidates:
+    """``Candidates`` within ``reach`` (the radius plus the skin); masked
+    segments of ``pool`` (bool[M]) are listed as if real."""
     slave_ok = _inputs.rows_ok(x, mask)
-    segments = _inputs.resolve_segments(surface)
+    segments = _inputs.resolve_segments(_inputs.with_pool(surface, pool))
     boxes, blocks = broad_phase(
         x, x, slave_ok, segments, reach, sizes.block_size, sizes.block_capacity
     )
@@ -89,18 +103,21 @@ def find(x, surface: Surface, reach, mask, sizes: Sizes) -> Candidates:
         segment_ok=segments.ok,
         indices=segments.indices,
         overflow=overflow,
+        pool=pool,
     )
 
 
 def expired(candidates: Candidates, x, surface: Surface, mask, skin) -> Array:
-    """bool[]: ``candidates`` may miss a pair now within the radius.
+    """i32[]: why ``candidates`` may miss a pair now within the radius, as bits
+    (``REBUILD_REASONS``); 0 while they hold.
 
     A pair within the radius now was within ``radius + skin`` when they were
     found if the largest slave move plus the largest move of a real
     segment's end is at most the skin (a segment moves no farther than its
     ends). Rows or segments that became real since, and segments joined to
-    other nodes, were never looked at: they expire the candidates too. Rows
-    and segments that are not real (padding) may change freely.
+    other nodes, were never looked at: they expire the candidates too,
+    except segments of the pool, which were listed in advance. Rows and
+    segments that are not real (padding) may change freely.
     """
 
     def largest(squared, ok):
@@ -118,7 +135,11 @@ def expired(candidates: Candidates, x, surface: Surface, mask, skin) -> Array:
     new_rows = jnp.any(row_ok & ~candidates.row_ok)
     new_segments = jnp.any(segments.ok & ~candidates.segment_ok)
     rejoined = jnp.any(segments.ok & jnp.any(segments.indices != candidates.indices, axis=-1))
-    return (moved > skin) | new_rows | new_segments | rejoined
+    reasons = (moved > skin, new_rows, new_segments, rejoined)
+    bits = (MOVED, NEW_ROWS, NEW_SEGMENTS, REJOINED)
+    return sum(jnp.where(flag, bit, 0) for flag, bit in zip(reasons, bits, strict=True)).astype(
+        jnp.int32
+    )
 
 
 class _How(NamedTuple):
@@ -200,7 +221,9 @@ def _rounding_reach(segments: Segments, radius):
     return radius + 64 * eps * (radius + 4 * longest)
 
 
-def _assemble_near(kept, ok, rows, segments: Segments, chosen, radius, capacity: int, num_rows):
+def _assemble_near(
+    kept, ok, rows, segments: Segments, chosen, radius, capacity: int, num_rows, ruling
+):
     """``(Contact, i32[K] rows, i32[] needed)`` of the kept slaves that can be found.
 
     Only slaves whose score says they may lie within the radius (within
@@ -211,12 +234,14 @@ def _assemble_near(kept, ok, rows, segments: Segments, chosen, radius, capacity:
     evaluation differently). ``rows`` are their slave rows, N past the end.
     """
     (choice, best), overflow = chosen
+    rule, tags = ruling
     reach = _rounding_reach(segments, radius)
     at, valid, needed = first_slots(ok & (choice >= 0) & (best <= reach * reach), capacity)
     x = jnp.where(valid[:, None], kept[at], 0)
     choice = jnp.where(valid, choice[at], -1)
+    radius = radius[at] if radius.ndim else radius
     overflow = overflow | (needed > capacity)
-    part = contact_from_choice(x, segments, choice, radius, overflow, valid)
+    part = contact_from_choice(x, segments, choice, radius, overflow, valid, rule, pick(tags, at))
     return part, jnp.where(valid, rows[at], num_rows), needed
 
 
@@ -229,13 +254,15 @@ def _contact(
     sizes: Sizes,
     candidates: Candidates | None = None,
     with_needed: bool = False,
+    pairing: Pairing = NO_PAIRING,
 ):
     """The sized bucket sort: a ``Contact``, or a ``ContactList`` where the
     sizes have a ``contact_capacity`` (then with ``with_needed``, also the
-    entries it needed: ``measure_contacts``)."""
+    entries it needed: ``measure_contacts``). ``radius`` is f[] or f[N]."""
     # Bad rows are left in ``x``: the broad phase's test skips them, and the
     # kept rows are zeroed when gathered, so no pass over all N rows copies x.
     segments = _inputs.resolve_segments(surface)
+    rule, tags, segments = tag(pairing, segments, surface.body, radius)
     compact, num_rows = sizes.contact_capacity, x.shape[0]
     no_overflow = jnp.zeros((), bool)
     if compact:
@@ -251,20 +278,26 @@ def _contact(
         # finite (real segments are) or empty, and ``kept_rows`` tests the
         # kept rows. A finiteness test per row here was a pass over x of its
         # own, as long as the cull's (measured 0.09 of 0.6 ms at 81,939 rows).
+        reach = _inputs.reach_of(radius, mask)
         boxes, blocks = broad_phase(
-            x, x, mask, segments, radius, sizes.block_size, sizes.block_capacity
+            x, x, mask, segments, reach, sizes.block_size, sizes.block_capacity
         )
         listed, overflow = None, blocks.overflow
     else:
         boxes, blocks, listed = None, candidates.blocks, candidates.listed
         overflow = candidates.overflow
     (kept,), ok = kept_rows(blocks, mask, x)
+    at = jnp.minimum(blocks.rows, num_rows - 1)
+    kept_tags = pick(tags, at)
+    kept_radius = radius[at] if radius.ndim else radius
 
     def assemble(choice, cells_overflow):
-        return contact_from_choice(kept, segments, choice, radius, cells_overflow, ok)
+        return contact_from_choice(
+            kept, segments, choice, kept_radius, cells_overflow, ok, rule, kept_tags
+        )
 
-    how = _How(squared_distance, sizes, assemble, empty_contact, num_rows)
-    queries = Queries((kept,), kept, ok)
+    how = _How(ruled(squared_distance, rule), sizes, assemble, empty_contact, num_rows)
+    queries = Queries((kept, kept_tags), kept, ok)
     if not compact:
         result = _search_kept(queries, blocks, segments, boxes, listed, how)
         return result._replace(overflow=result.overflow | overflow)
@@ -275,7 +308,11 @@ def _contact(
     go, chosen = _searched(queries, blocks, segments, boxes, listed, how)
 
     def assemble_near(chosen):
-        return _assemble_near(kept, ok, blocks.rows, segments, chosen, radius, compact, num_rows)
+        return _assemble_near(
+            kept, ok, blocks.rows, segments, chosen, kept_radius, compact, num_rows, ruling
+        )
+
+    ruling = (rule, kept_tags)
 
     def pack(near):
         part, rows, needed = near
@@ -289,9 +326,11 @@ def _contact(
 
 
 @searched_whole(rows="x")
-def _crossing(x_prev, x, surface, mask, sizes: Sizes):
+def _crossing(x_prev, x, surface, mask, sizes: Sizes, pairing: Pairing = NO_PAIRING):
     slave_ok = _inputs.paths_ok(x_prev, x, mask)
     segments = _inputs.resolve_segments(surface)
+    lengths = jnp.where(slave_ok, path_lengths(x_prev, x), 0)
+    rule, tags, segments = tag(pairing, segments, surface.body, lengths)
     if x.shape[0] == 0 or segments.ok.shape[0] == 0:
         return empty_crossing(x, jnp.zeros((), bool))
     # A path meets a segment only if their boxes meet.
@@ -301,6 +340,7 @@ def _crossing(x_prev, x, surface, mask, sizes: Sizes):
         path_low, path_high, slave_ok, segments, no_reach, sizes.block_size, sizes.block_capacity
     )
     (start, end), ok = kept_rows(blocks, mask, x_prev, x)
+    kept_tags = pick(tags, jnp.minimum(blocks.rows, x.shape[0] - 1))
     # Where a path meets a segment, its start lies within the path's length
     # of that segment: bin the segments inflated by the longest kept path and
     # look up each path's start (the paper's boxes inflated by d_max).
@@ -310,8 +350,9 @@ def _crossing(x_prev, x, surface, mask, sizes: Sizes):
     def assemble(choice, overflow):
         return crossing_from_choice(start, end, segments, choice, overflow, ok)
 
-    how = _How(first_hit_time, sizes, assemble, empty_crossing, x.shape[0])
-    result = _search_kept(Queries((start, end), start, ok), blocks, segments, boxes, None, how)
+    how = _How(ruled(first_hit_time, rule), sizes, assemble, empty_crossing, x.shape[0])
+    queries = Queries((start, end, kept_tags), start, ok)
+    result = _search_kept(queries, blocks, segments, boxes, None, how)
     return result._replace(overflow=result.overflow | blocks.overflow)
 
 
@@ -321,14 +362,34 @@ contact_jit = jax.jit(_contact, static_argnames=("sizes", "with_needed"))
 crossing_jit = jax.jit(_crossing, static_argnames="sizes")
 
 
-def sized_bucket_sort(x, surface, *, radius, mask=None, sizes: Sizes, candidates=None) -> Contact:
+def sized_bucket_sort(
+    x, surface, *, radius, mask=None, sizes: Sizes, candidates=None, **pair_keywords
+) -> Contact:
     """``bucket_sort`` at given ``Sizes`` (and reused ``candidates``), inputs
     checked as the public detectors check them; runs under ``jit`` and
     ``vmap`` (``sizes`` is static). ``Search``, the benchmarks and the tests
-    call it."""
+    call it. ``pair_keywords``: ``slave_node``, ``slave_body``, ``self_contact``."""
     x, surface, radius, mask = _inputs.check_contact_inputs(x, surface, radius, mask)
+    pairing = _check_pairing(pair_keywords, x, surface, mask)
     check_sizes(sizes, x.shape[0], for_paths=False)
-    return contact_jit(x, surface, radius, mask, sizes=sizes, candidates=candidates)
+    return contact_jit(
+        x, surface, radius, mask, sizes=sizes, candidates=candidates, pairing=pairing
+    )
+
+
+def _check_pairing(pair_keywords: dict, x, surface: Surface, mask) -> Pairing:
+    """The ``Pairing`` of a detector's pair keywords (checked)."""
+    unknown = set(pair_keywords) - {"slave_node", "slave_body", "self_contact"}
+    if unknown:
+        raise TypeError(f"unexpected keyword arguments {sorted(unknown)}")
+    return _inputs.check_pairing(
+        pair_keywords.get("slave_node"),
+        pair_keywords.get("slave_body"),
+        pair_keywords.get("self_contact", False),
+        x.shape[0],
+        surface.nodes.shape[0],
+        mask,
+    )
 
 
 def room_for_every_slot(sizes: Sizes) -> Sizes:
@@ -336,7 +397,7 @@ def room_for_every_slot(sizes: Sizes) -> Sizes:
     return dataclasses.replace(sizes, contact_capacity=max(1, sizes.slave_capacity))
 
 
-def entries_needed(x, surface, radius, mask, sizes: Sizes) -> Array:
+def entries_needed(x, surface, radius, mask, sizes: Sizes, pairing=NO_PAIRING) -> Array:
     """i32[]: the entries the compact form needs for this data (the slaves it
     assembles: those found, and any at the radius to within rounding).
 
@@ -344,31 +405,34 @@ def entries_needed(x, surface, radius, mask, sizes: Sizes) -> Array:
     its own); ``vmap`` it for a batch.
     """
     wide = room_for_every_slot(sizes)
-    return contact_jit(x, surface, radius, mask, sizes=wide, with_needed=True)[1]
+    return contact_jit(x, surface, radius, mask, sizes=wide, with_needed=True, pairing=pairing)[1]
 
 
-def measure_contacts(x, surface, radius, mask, sizes: Sizes, slack: float, axes=None) -> Sizes:
+def measure_contacts(
+    x, surface, radius, mask, sizes: Sizes, slack: float, axes=None, pairing=NO_PAIRING
+) -> Sizes:
     """``sizes`` with the compact form's capacity: the entries needed now times
     ``slack`` (at least 1), as ``measure`` sizes the rest (concrete inputs).
-    With ``axes`` (``vmap``'s ``in_axes`` of ``x, surface, mask``), the
-    largest need of a batch."""
+    With ``axes`` (``vmap``'s ``in_axes`` of ``x, surface, mask, pairing``),
+    the largest need of a batch."""
     radius = jnp.asarray(radius, x.dtype)
 
-    def count(x, surface, mask):
-        return entries_needed(x, surface, radius, mask, sizes)
+    def count(x, surface, mask, pairing):
+        return entries_needed(x, surface, radius, mask, sizes, pairing)
 
     if axes is not None:
         count = jax.vmap(count, axes)
-    needed = int(np.max(np.asarray(count(x, surface, mask))))
+    needed = int(np.max(np.asarray(count(x, surface, mask, pairing))))
     return dataclasses.replace(sizes, contact_capacity=grow(needed, slack))
 
 
-def sized_bucket_swept(x_prev, x, surface, *, mask=None, sizes: Sizes) -> Crossing:
+def sized_bucket_swept(x_prev, x, surface, *, mask=None, sizes: Sizes, **pair_keywords) -> Crossing:
     """``bucket_swept`` at given ``Sizes``, inputs checked; as ``sized_bucket_sort``."""
     x_prev, x, mask = _inputs.check_path_inputs(x_prev, x, mask)
     surface = _inputs.check_surface(surface, x.dtype)
+    pairing = _check_pairing(pair_keywords, x, surface, mask)
     check_sizes(sizes, x.shape[0], for_paths=True)
-    return crossing_jit(x_prev, x, surface, mask, sizes=sizes)
+    return crossing_jit(x_prev, x, surface, mask, sizes=sizes, pairing=pairing)
 
 
 def check_sizes(sizes, num_slaves: int, for_paths: bool):
@@ -396,7 +460,15 @@ def require_concrete(name: str, values, hint: str | None = None):
 
 
 def bucket_sort(
-    x: Array, surface: Surface, *, radius, mask: Array | None = None, compact: bool = False
+    x: Array,
+    surface: Surface,
+    *,
+    radius,
+    mask: Array | None = None,
+    compact: bool = False,
+    slave_node: Array | None = None,
+    slave_body: Array | None = None,
+    self_contact: bool = False,
 ) -> Contact | ContactList:
     """Closest master segment of every slave near the master, by bucket sort.
 
@@ -409,11 +481,13 @@ def bucket_sort(
       x: f[N, 2] slave coordinates. Rows close in the input should be close in
         space (a mesh numbering is): slaves are culled in blocks of rows.
       surface: the master ``Surface``; its nodes share ``x``'s dtype.
-      radius: scalar search radius, >= 0.
+      radius: search radius, >= 0: a scalar, or f[N] one per slave.
       mask: optional bool[N], False for padding slaves.
       compact: return the found contacts only, as a ``ContactList`` with an
         entry for every slave the broad phase kept (``Search(compact=True)``
         measures a tighter capacity once and reuses it).
+      slave_node, slave_body, self_contact: the pair rule, as for
+        ``all_to_all``.
 
     Returns:
       A ``Contact`` equal to ``all_to_all``'s (its sizes are measured for
@@ -430,18 +504,32 @@ def bucket_sort(
       True
     """
     x, surface, radius, mask = _inputs.check_contact_inputs(x, surface, radius, mask)
-    require_concrete("bucket_sort", (x, surface, radius, mask))
+    pairing = _inputs.check_pairing(
+        slave_node, slave_body, self_contact, x.shape[0], surface.nodes.shape[0], mask
+    )
+    require_concrete("bucket_sort", (x, surface, radius, mask, pairing))
     use_cells = surface.segments.shape[0] > CELLS_ABOVE
-    (x,), mask, surface, num_rows = pad_scene((x,), mask, surface)
-    sizes = measure(x, surface, radius=radius, mask=mask, use_cells=use_cells)
-    if not compact:
-        return cut_rows(contact_jit(x, surface, radius, mask, sizes=sizes), num_rows)
-    found = contact_jit(x, surface, radius, mask, sizes=room_for_every_slot(sizes))
-    return cut_entries(found, num_rows)
+    per_row = radius if radius.ndim else None
+    (x,), mask, surface, (per_row, pairing), num_rows = pad_scene(
+        (x,), mask, surface, (per_row, pairing)
+    )
+    radius = radius if per_row is None else per_row
+    sizes = measure(x, surface, radius=reach_of(radius, mask), mask=mask, use_cells=use_cells)
+    if compact:
+        sizes = room_for_every_slot(sizes)
+    found = contact_jit(x, surface, radius, mask, sizes=sizes, pairing=pairing)
+    return cut_entries(found, num_rows) if compact else cut_rows(found, num_rows)
 
 
 def bucket_swept(
-    x_prev: Array, x: Array, surface: Surface, *, mask: Array | None = None
+    x_prev: Array,
+    x: Array,
+    surface: Surface,
+    *,
+    mask: Array | None = None,
+    slave_node: Array | None = None,
+    slave_body: Array | None = None,
+    self_contact: bool = False,
 ) -> Crossing:
     """First crossing of every slave's path with the master, by bucket sort.
 
@@ -454,14 +542,19 @@ def bucket_swept(
       x: f[N, 2] current slave positions.
       surface: the master ``Surface``.
       mask: optional bool[N], False for padding slaves.
+      slave_node, slave_body, self_contact: the pair rule, as for ``swept``.
 
     Returns:
       A ``Crossing`` equal to ``swept``'s.
     """
     x_prev, x, mask = _inputs.check_path_inputs(x_prev, x, mask)
     surface = _inputs.check_surface(surface, x_prev.dtype)
-    require_concrete("bucket_swept", (x_prev, x, surface, mask))
+    pairing = _inputs.check_pairing(
+        slave_node, slave_body, self_contact, x.shape[0], surface.nodes.shape[0], mask
+    )
+    require_concrete("bucket_swept", (x_prev, x, surface, mask, pairing))
     use_cells = surface.segments.shape[0] > CELLS_ABOVE
-    (x_prev, x), mask, surface, num_rows = pad_scene((x_prev, x), mask, surface)
+    (x_prev, x), mask, surface, pairing, num_rows = pad_scene((x_prev, x), mask, surface, pairing)
     sizes = measure(x, surface, x_prev=x_prev, mask=mask, use_cells=use_cells)
-    return cut_rows(crossing_jit(x_prev, x, surface, mask, sizes=sizes), num_rows)
+    crossing = crossing_jit(x_prev, x, surface, mask, sizes=sizes, pairing=pairing)
+    return cut_rows(crossing, num_rows)

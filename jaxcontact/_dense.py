@@ -19,19 +19,38 @@ from jaxcontact._inputs import Segments
 from jaxcontact._lowest import one_scene_at_a_time
 from jaxcontact._narrow import in_stages, search_all, vmapped
 from jaxcontact._padded import cut_rows, pad_scene
+from jaxcontact._pairs import NO_PAIRING, Pairing, ruled, tag
 from jaxcontact._placement import searched_whole
 from jaxcontact._types import Array, Contact, Crossing, Surface
 
 
-def all_to_all(x: Array, surface: Surface, *, radius, mask: Array | None = None) -> Contact:
+def all_to_all(
+    x: Array,
+    surface: Surface,
+    *,
+    radius,
+    mask: Array | None = None,
+    slave_node: Array | None = None,
+    slave_body: Array | None = None,
+    self_contact: bool = False,
+) -> Contact:
     """Closest master segment of every slave, by dense N x M projection.
 
     Args:
       x: f[N, 2] slave coordinates (float32 or float64).
       surface: the master ``Surface``; its nodes share ``x``'s dtype.
-      radius: scalar search radius, >= 0; a slave is ``found`` when its
-        closest real segment lies within it.
+      radius: search radius, >= 0: a scalar, or f[N] one per slave; a slave
+        is ``found`` when its closest real segment lies within its radius.
       mask: optional bool[N], False for padding slaves.
+      slave_node: optional i32[N], the index in ``surface.nodes`` that each
+        slave is (-1 for none): a slave never pairs with a segment that has
+        its own node as an end.
+      slave_body: optional i32[N], each slave's body: with ``surface.body``
+        too, a slave pairs only with other bodies' segments.
+      self_contact: a slave also pairs with its own body's segments, except
+        those in its neighbourhood along the outline (docs/contract.md,
+        "Bodies and self-contact"). Needs ``slave_node``; with no body
+        labels the whole surface is one body.
 
     Returns:
       A ``Contact`` with one row per slave, in ``x``'s dtype. ``overflow`` is
@@ -51,13 +70,21 @@ def all_to_all(x: Array, surface: Surface, *, radius, mask: Array | None = None)
       ([0.25, -0.125], [False, True], [[0.0, 1.0], [0.0, 1.0]])
     """
     x, surface, radius, mask = _inputs.check_contact_inputs(x, surface, radius, mask)
-    (x,), mask, surface, num_rows = pad_scene((x,), mask, surface)
-    return cut_rows(_all_to_all(x, surface, radius, mask), num_rows)
+    pairing = _inputs.check_pairing(
+        slave_node, slave_body, self_contact, x.shape[0], surface.nodes.shape[0], mask
+    )
+    per_row = radius if radius.ndim else None
+    (x,), mask, surface, (per_row, pairing), num_rows = pad_scene(
+        (x,), mask, surface, (per_row, pairing)
+    )
+    radius = radius if per_row is None else per_row
+    return cut_rows(_all_to_all(x, surface, radius, mask, pairing), num_rows)
 
 
 def _search_all(kernel, rows, segments: Segments, slave_ok, assemble):
     """``assemble(choice)`` for the segment of lowest ``kernel(*row, segment)``
-    per row, over every segment.
+    per row, over every segment (``kernel`` from ``_pairs.ruled``, the
+    rows' tags last in ``rows``).
 
     The search runs in a ``lax.cond`` (``_narrow.in_stages``), scene by
     scene under ``vmap`` (``_lowest.one_scene_at_a_time``). Masked rows are
@@ -104,6 +131,11 @@ def _whole_vectors(rows: tuple, mask):
     return jax.lax.optimization_barrier(padded)
 
 
+def _whole_vectors_of(per_row, num_rows: int):
+    """Per-row arrays (a pytree) padded with zeros to ``num_rows`` (``_whole_vectors``)."""
+    return jax.tree.map(lambda values: jnp.pad(values, (0, num_rows - values.shape[0])), per_row)
+
+
 def _first_rows(result, num_rows: int):
     """``result`` (a ``Contact`` or ``Crossing``) cut back to its first ``num_rows`` rows."""
     result = jax.lax.optimization_barrier(result)  # the search writes whole vectors too
@@ -114,18 +146,29 @@ def _first_rows(result, num_rows: int):
 # search took seconds to dispatch on a new shape.
 @jax.jit
 @searched_whole(rows="x")
-def _all_to_all(x, surface, radius, mask):
+def _all_to_all(x, surface, radius, mask, pairing: Pairing = NO_PAIRING):
     x, slave_ok = _inputs.sanitize_points(x, mask)
     segments = _inputs.resolve_segments(surface)
+    rule, tags, segments = tag(pairing, segments, surface.body, radius)
 
     def assemble(choice):
-        return contact_from_choice(x, segments, choice, radius, no_overflow, slave_ok)
+        return contact_from_choice(x, segments, choice, radius, no_overflow, slave_ok, rule, tags)
 
     no_overflow = jnp.zeros((), bool)
-    return _search_all(squared_distance, (x,), segments, slave_ok, assemble)
+    kernel = ruled(squared_distance, rule)
+    return _search_all(kernel, (x, tags), segments, slave_ok, assemble)
 
 
-def swept(x_prev: Array, x: Array, surface: Surface, *, mask: Array | None = None) -> Crossing:
+def swept(
+    x_prev: Array,
+    x: Array,
+    surface: Surface,
+    *,
+    mask: Array | None = None,
+    slave_node: Array | None = None,
+    slave_body: Array | None = None,
+    self_contact: bool = False,
+) -> Crossing:
     """First crossing of every slave's path ``x_prev -> x`` with the master, densely.
 
     The earliest crossing along the path wins; exact ties go to the lower
@@ -136,6 +179,9 @@ def swept(x_prev: Array, x: Array, surface: Surface, *, mask: Array | None = Non
       x: f[N, 2] current slave positions, same shape and dtype.
       surface: the master ``Surface``; its nodes share ``x``'s dtype.
       mask: optional bool[N], False for padding slaves.
+      slave_node, slave_body, self_contact: the pair rule, as for
+        ``all_to_all``; a path's self-contact neighbourhood is measured in
+        multiples of its length.
 
     Returns:
       A ``Crossing`` with one row per slave, in ``x``'s dtype; ``overflow`` is
@@ -151,21 +197,32 @@ def swept(x_prev: Array, x: Array, surface: Surface, *, mask: Array | None = Non
     """
     x_prev, x, mask = _inputs.check_path_inputs(x_prev, x, mask)
     surface = _inputs.check_surface(surface, x.dtype)
-    (x_prev, x), mask, surface, num_rows = pad_scene((x_prev, x), mask, surface)
-    return cut_rows(_swept(x_prev, x, surface, mask), num_rows)
+    pairing = _inputs.check_pairing(
+        slave_node, slave_body, self_contact, x.shape[0], surface.nodes.shape[0], mask
+    )
+    (x_prev, x), mask, surface, pairing, num_rows = pad_scene((x_prev, x), mask, surface, pairing)
+    return cut_rows(_swept(x_prev, x, surface, mask, pairing), num_rows)
+
+
+def path_lengths(x_prev: Array, x: Array) -> Array:
+    """f[N]: each path's length, a path's reach for the self-contact window."""
+    return jnp.sqrt(jnp.sum((x - x_prev) ** 2, axis=-1))
 
 
 @jax.jit
 @searched_whole(rows="x")
-def _swept(x_prev, x, surface, mask):
+def _swept(x_prev, x, surface, mask, pairing: Pairing = NO_PAIRING):
     num_rows = x.shape[0]
     (x_prev, x), mask = _whole_vectors((x_prev, x), mask)
+    pairing = _whole_vectors_of(pairing, x.shape[0])
     x_prev, x, slave_ok = _inputs.sanitize_paths(x_prev, x, mask)
     segments = _inputs.resolve_segments(surface)
+    rule, tags, segments = tag(pairing, segments, surface.body, path_lengths(x_prev, x))
 
     def assemble(choice):
         return crossing_from_choice(x_prev, x, segments, choice, no_overflow, slave_ok)
 
     no_overflow = jnp.zeros((), bool)
-    crossing = _search_all(first_hit_time, (x_prev, x), segments, slave_ok, assemble)
+    kernel = ruled(first_hit_time, rule)
+    crossing = _search_all(kernel, (x_prev, x, tags), segments, slave_ok, assemble)
     return _first_rows(crossing, num_rows)

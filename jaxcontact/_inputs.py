@@ -124,25 +124,94 @@ def check_surface(surface: Surface, dtype) -> Surface:
     segments = check_segments(surface.segments)
     mask = check_mask("surface.mask", surface.mask, segments.shape[0])
     _check_real_indices(segments, mask, nodes.shape[0])
-    return Surface(nodes, _as_int32(segments, nodes.shape[0]), mask)
+    body = check_labels("surface.body", surface.body, segments.shape[0], "M")
+    return Surface(nodes, _as_int32(segments, nodes.shape[0]), mask, body)
 
 
-def check_radius(radius, dtype) -> Array:
-    """Checks ``radius`` is a real scalar, finite and >= 0 where concrete."""
-    if np.ndim(radius) != 0:
-        raise ValueError(f"radius must be a scalar; got shape {tuple(np.shape(radius))}")
+def check_radius(radius, dtype, num_rows: int | None = None, mask=None) -> Array:
+    """Checks ``radius``: a real scalar, or f[N] (one per slave) where
+    ``num_rows`` is given; finite and >= 0 where concrete (masked rows' values
+    may be anything)."""
+    shape = tuple(np.shape(radius))
+    if shape != () and (num_rows is None or shape != (num_rows,)):
+        wanted = "a scalar" if num_rows is None else f"a scalar or shape ({num_rows},)"
+        raise ValueError(f"radius must be {wanted}; got shape {shape}")
     if np.dtype(jnp.result_type(radius)).kind not in "fiu":
         raise ValueError(f"radius must be real; got dtype {jnp.result_type(radius)}")
-    if _is_concrete(radius):
-        value = float(np.asarray(radius))
-        if not np.isfinite(value) or value < 0:
-            raise ValueError(f"radius must be finite and >= 0; got {value}")
+    if _is_concrete(radius) and _is_concrete(mask):
+        values = np.asarray(radius, np.float64).reshape(-1)
+        if shape and mask is not None:
+            values = values[np.asarray(mask)]
+        bad = ~np.isfinite(values) | (values < 0)
+        if bad.any():
+            raise ValueError(f"radius must be finite and >= 0; got {values[bad][0]}")
     return jnp.asarray(radius, dtype)
+
+
+def reach_of(radius: Array, ok: Array | None) -> Array:
+    """f[]: the farthest any real row reaches: ``radius``, or its largest
+    valid value over the rows ``ok`` (a per-slave radius). Under ``jit`` a
+    real row's radius that is negative or not finite finds nothing, and
+    reaches nothing here."""
+    if radius.ndim == 0:
+        return radius
+    valid = jnp.isfinite(radius) & (radius >= 0)
+    if ok is not None:
+        valid = valid & ok
+    return jnp.max(jnp.where(valid, radius, 0), initial=0)
+
+
+def check_labels(name: str, labels, length: int, symbol: str = "N"):
+    """Checks optional integer labels of shape ``(length,)``; returns int32 or None."""
+    if labels is None:
+        return None
+    if not hasattr(labels, "dtype"):
+        labels = np.asarray(labels)
+    if np.shape(labels) != (length,) or np.dtype(labels.dtype).kind not in "iu":
+        raise ValueError(
+            f"{name} must have shape ({symbol},) = ({length},) and an integer dtype; "
+            f"got {_describe(labels)}"
+        )
+    if np.can_cast(labels.dtype, np.int32):
+        return jnp.asarray(labels, jnp.int32)
+    # Wider labels are compared in their own dtype first: narrowing wraps.
+    xp = np if isinstance(labels, np.ndarray) else jnp
+    info = np.iinfo(np.int32)
+    fits = (labels >= info.min) & (labels <= info.max)
+    if _is_concrete(labels) and not np.all(np.asarray(fits)):
+        raise ValueError(f"{name} must fit in int32; got {_describe(labels)}")
+    return jnp.asarray(xp.where(fits, labels, -1).astype(np.int32))
+
+
+def check_pairing(slave_node, slave_body, self_contact, num_rows: int, num_nodes: int, mask):
+    """Checks the pair keywords of a detector; returns a ``_pairs.Pairing``."""
+    from jaxcontact._pairs import Pairing
+
+    if not isinstance(self_contact, bool):
+        raise ValueError(f"self_contact must be a bool; got {self_contact!r}")
+    if self_contact and slave_node is None:
+        raise ValueError(
+            "self_contact=True needs slave_node= (i32[N]: the surface node each slave is, "
+            "-1 for none): a slave's neighbourhood is measured from its own node"
+        )
+    slave_node = check_labels("slave_node", slave_node, num_rows)
+    slave_body = check_labels("slave_body", slave_body, num_rows)
+    if slave_node is not None and _is_concrete(slave_node) and _is_concrete(mask):
+        values = np.asarray(slave_node)
+        if mask is not None:
+            values = values[np.asarray(mask)]
+        bad = (values < -1) | (values >= num_nodes)
+        if bad.any():
+            raise ValueError(
+                f"slave_node must be -1 or index surface.nodes, in [-1, {num_nodes - 1}]; "
+                f"got {int(values[bad][0])}"
+            )
+    return Pairing(slave_node, slave_body, self_contact)
 
 
 @functools.partial(
     jax.tree_util.register_dataclass,
-    data_fields=["start", "end", "ok", "indices"],
+    data_fields=["start", "end", "ok", "indices", "tags"],
     meta_fields=["num_nodes"],
 )
 @dataclasses.dataclass(frozen=True)
@@ -158,6 +227,7 @@ class Segments:
     ok: Array  # bool[M]  real, finite and of non-zero length
     indices: Array | None  # i32[M, 2]  the node indices of each segment's ends
     num_nodes: int  # P, static: ok segments' node indices lie in [0, P)
+    tags: object = None  # _pairs.SegmentTags: what the pair rule reads, or None
 
 
 def ends_of(nodes: Array, indices: Array) -> Array:
@@ -190,6 +260,14 @@ def resolve_segments(surface: Surface) -> Segments:
     return Segments(start, end, ok, surface.segments, num_nodes)
 
 
+def with_pool(surface: Surface, pool) -> Surface:
+    """``surface`` with the masked segments of ``pool`` (bool[M] or None)
+    counted as real: what a search sizes for and lists in advance."""
+    if pool is None or surface.mask is None:
+        return surface
+    return surface._replace(mask=surface.mask | pool)
+
+
 def rows_ok(points: Array, mask: Array | None) -> Array:
     """bool[N]: the row is finite and not masked out."""
     ok = jnp.all(jnp.isfinite(points), axis=-1)
@@ -203,10 +281,13 @@ def sanitize_points(points: Array, mask: Array | None) -> tuple[Array, Array]:
 
 
 def check_contact_inputs(x, surface: Surface, radius, mask):
-    """Checks the arguments of a closest-point detector; returns them as arrays."""
+    """Checks the arguments of a closest-point detector; returns them as arrays.
+
+    ``radius`` may be a scalar or f[N], one per slave."""
     x = check_points("x", x)
     mask = check_mask("mask", mask, x.shape[0])
-    return x, check_surface(surface, x.dtype), check_radius(radius, x.dtype), mask
+    surface = check_surface(surface, x.dtype)
+    return x, surface, check_radius(radius, x.dtype, x.shape[0], mask), mask
 
 
 def check_path_inputs(x_prev, x, mask):

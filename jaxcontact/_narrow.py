@@ -19,6 +19,7 @@ from jaxcontact._cells import CellLists, list_candidates, segment_in_slot
 from jaxcontact._geometry import Edge, edge
 from jaxcontact._inputs import Segments
 from jaxcontact._lowest import lowest_score
+from jaxcontact._pairs import pick
 from jaxcontact._sizes import Sizes
 from jaxcontact._sort import stable_order
 from jaxcontact._types import Array
@@ -27,7 +28,9 @@ from jaxcontact._types import Array
 class Queries(NamedTuple):
     """The rows a search scores, as the pair kernel takes them."""
 
-    rows: tuple  # f[S, 2] each: the kernel's per-row arguments (a point; a path's two ends)
+    # The kernel's per-row arguments: f[S, 2] each (a point; a path's two
+    # ends), then the rows' pair tags (``_pairs.RowTags``) or None.
+    rows: tuple
     query: Array  # f[S, 2]  the point whose cell is looked up
     ok: Array  # bool[S]  the row is real
 
@@ -37,8 +40,9 @@ def search_all(pair_value, segments: Segments, num_rows: int, dtype) -> tuple[Ar
     segment, and its score (``all_to_all``, ``swept``, and the bucket sort's
     kept slaves when there are few segments)."""
 
-    # Each segment's own share of the kernel, for all at once (``Edge``).
-    edges = edge(segments.start, segments.end)
+    # Each segment's own share of the kernel, for all at once (``Edge``),
+    # with what the pair rule reads of it (``_pairs``).
+    edges = (edge(segments.start, segments.end), segments.tags)
 
     def score(k):
         value = pair_value(jax.tree.map(lambda field: field[k], edges))
@@ -59,7 +63,9 @@ def _search_rows(pair_value, segments: Segments, listed: CellLists, capacity: in
         index = jnp.maximum(segment, 0)
         # Computed per row from the gathered ends: the same numbers as a
         # dense search's, so both score a pair alike.
-        value = pair_value(edge(segments.start[index], segments.end[index]))
+        value = pair_value(
+            (edge(segments.start[index], segments.end[index]), pick(segments.tags, index))
+        )
         # Reused lists may name a segment masked or degenerate since.
         listed_ok = (segment >= 0) & segments.ok[index]
         return jnp.where(listed_ok, value, jnp.inf), segment
@@ -104,7 +110,7 @@ def search_listed(kernel, rows, segments: Segments, listed: CellLists, sizes: Si
         return jnp.pad(values[order], ((0, pad),) + ((0, 0),) * (values.ndim - 1))
 
     first, count = arrange(listed.first), arrange(listed.count)
-    rows = tuple(map(arrange, rows))
+    rows = jax.tree.map(arrange, rows)
     longest = count[::chunk_rows]  # each chunk's longest list comes first
 
     def search_chunk(state):
@@ -115,7 +121,7 @@ def search_listed(kernel, rows, segments: Segments, listed: CellLists, sizes: Si
             return jax.lax.dynamic_slice_in_dim(values, at, chunk_rows)
 
         lists = CellLists(part(first), part(count), listed.order)
-        pair_value = vmapped(kernel, *map(part, rows))
+        pair_value = vmapped(kernel, *jax.tree.map(part, rows))
         chosen = _search_rows(pair_value, segments, lists, capacity, dtype)
         found = tuple(
             jax.lax.dynamic_update_slice_in_dim(whole, new, at, 0)
@@ -155,12 +161,13 @@ def choose(queries: Queries, segments: Segments, boxes: Box, kernel, sizes: Size
 def vmapped(kernel, *rows):
     """``pair_value(segment)`` mapping ``kernel(*row, segment)`` over rows.
 
-    ``segment`` is an ``Edge`` of one segment for all rows (f[2] ends) or
-    one per row (f[S, 2] ends).
+    ``segment`` is ``(Edge, segment tags)``: of one segment for all rows
+    (f[2] ends) or one per row (f[S, 2] ends). Kernels come from
+    ``_pairs.ruled``; the last of ``rows`` are the rows' tags (or None).
     """
 
-    def pair_value(segment: Edge):
-        axis = None if segment.start.ndim == 1 else 0
+    def pair_value(segment: tuple[Edge, object]):
+        axis = None if segment[0].start.ndim == 1 else 0
         return jax.vmap(kernel, in_axes=(0,) * len(rows) + (axis,))(*rows, segment)
 
     return pair_value

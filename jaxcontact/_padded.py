@@ -86,16 +86,20 @@ def _row_mask(mask, num_rows: int, length: int, module):
     return _pad(mask, length, False, module)
 
 
-def _pad_arrays(slaves, mask, surface: Surface, rows: int, segments: int, nodes: int, module):
+def _pad_arrays(
+    slaves, mask, surface: Surface, extras, rows: int, segments: int, nodes: int, module
+):
     num_rows, num_segments = slaves[0].shape[0], surface.segments.shape[0]
     slaves = tuple(_pad(values, rows, 0, module) for values in slaves)
+    extras = jax.tree.map(lambda values: _pad(values, rows, 0, module), extras)
     mask = _row_mask(mask, num_rows, rows, module)
     segment_mask = _row_mask(surface.mask, num_segments, segments, module)
-    nodes, segments = (
+    nodes, body, segments = (
         _pad(surface.nodes, nodes, 0, module),
+        _pad(surface.body, segments, 0, module),
         _pad(surface.segments, segments, 0, module),
     )
-    return slaves, mask, Surface(nodes, segments, segment_mask)
+    return slaves, mask, Surface(nodes, segments, segment_mask, body), extras
 
 
 # Arrays on an accelerator are padded there, in one small program (op by op,
@@ -105,13 +109,14 @@ _pad_on_device = jax.jit(
 )
 
 
-def pad_scene(slaves: tuple, mask, surface: Surface):
-    """``(slaves, mask, surface, num_rows)`` padded to their size classes.
+def pad_scene(slaves: tuple, mask, surface: Surface, extras=None):
+    """``(slaves, mask, surface, extras, num_rows)`` padded to their size classes.
 
     ``slaves`` are the checked f[N, 2] arrays of one query (``(x,)`` or
-    ``(x_prev, x)``). Returns them unchanged, with ``num_rows = None``, when
-    padding would not help: traced inputs, arrays spread over several devices,
-    empty scenes.
+    ``(x_prev, x)``); ``extras`` a pytree of other per-row arrays (a radius
+    per slave, the pair keywords), padded with zeros. Returns them
+    unchanged, with ``num_rows = None``, when padding would not help: traced
+    inputs, arrays spread over several devices, empty scenes.
     """
     num_rows, num_segments = slaves[0].shape[0], surface.segments.shape[0]
     num_nodes = surface.nodes.shape[0]
@@ -123,15 +128,15 @@ def pad_scene(slaves: tuple, mask, surface: Surface):
     if (
         num_rows == 0
         or num_segments == 0
-        or _traced(slaves, mask, surface)
-        or _on_several_devices(slaves, mask, surface)
+        or _traced(slaves, mask, surface, extras)
+        or _on_several_devices(slaves, mask, surface, extras)
     ):
-        return slaves, mask, surface, None
+        return slaves, mask, surface, extras, None
     # On the CPU, NumPy pads without compiling anything.
-    on_cpu = _on_cpu(slaves, mask, surface)
+    on_cpu = _on_cpu(slaves, mask, surface, extras)
     pad = functools.partial(_pad_arrays, module=np) if on_cpu else _pad_on_device
-    slaves, mask, surface = pad(slaves, mask, surface, rows=rows, segments=segments, nodes=nodes)
-    return slaves, mask, surface, num_rows
+    padded = pad(slaves, mask, surface, extras, rows=rows, segments=segments, nodes=nodes)
+    return *padded, num_rows
 
 
 @functools.partial(jax.jit, static_argnames="num_rows")

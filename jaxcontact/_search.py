@@ -22,6 +22,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxcontact import _bucket, _dense, _inputs
+from jaxcontact._pairs import Pairing
 from jaxcontact._placement import replicated, searched_whole
 from jaxcontact._sizes import CELLS_ABOVE, CHUNK_ROWS, Sizes, largest, measure, measure_batch
 from jaxcontact._types import Array, Contact, ContactList, Crossing, Surface
@@ -31,7 +32,7 @@ METHODS = ("auto", "binned", "dense", "exhaustive")
 
 @functools.partial(
     jax.tree_util.register_dataclass,
-    data_fields=["candidates", "overflow", "rebuilds"],
+    data_fields=["candidates", "overflow", "rebuilds", "last_rebuild"],
     meta_fields=["sizes", "path_sizes", "reach"],
 )
 @dataclasses.dataclass(frozen=True)
@@ -54,6 +55,11 @@ class SearchState:
         contact or crossing may have been missed. It stays True.
       rebuilds: i32[] how often the candidates were found again since
         ``allocate``.
+      last_rebuild: i32[] why they were last found again, as bits
+        (``rebuild_reasons`` names them): 1 the slaves and the master moved
+        more than the skin, 2 a slave row became real, 4 a segment outside
+        the pool became real, 8 a real segment was joined to other nodes;
+        0 before the first rebuild.
       reach: ``radius + skin`` of the search that allocated it (static):
         a search that reaches farther refuses the state.
     """
@@ -63,7 +69,13 @@ class SearchState:
     candidates: _bucket.Candidates | None
     overflow: Array
     rebuilds: Array
+    last_rebuild: Array
     reach: float | None = None
+
+    def rebuild_reasons(self) -> list[str]:
+        """Why the candidates were last found again, in words (host side; [] if never)."""
+        bits = int(np.bitwise_or.reduce(np.asarray(self.last_rebuild).reshape(-1), initial=0))
+        return [words for bit, words in _bucket.REBUILD_REASONS.items() if bits & bit]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -130,6 +142,14 @@ class Search:
         Faster where few slaves touch (the N rows are never written), and
         what a force assembly by ``segment_sum`` over the contacts wants.
         Not for the ``"exhaustive"`` method, nor for ``swept``.
+      self_contact: slaves also pair with their own body's segments outside
+        their neighbourhood along the outline (``all_to_all``'s
+        ``self_contact``); the calls then need ``slave_node=``.
+
+    A radius per slave: ``radius`` is the static bound the sizes are built
+    for; ``closest(..., radius=r)`` takes a traced scalar or f[N] at or
+    under it (a new value compiles nothing), and a real slave whose radius
+    exceeds it sets ``overflow``.
     """
 
     radius: float | None = None
@@ -140,6 +160,7 @@ class Search:
     cells_above: int = CELLS_ABOVE
     chunk_rows: int = CHUNK_ROWS
     compact: bool = False
+    self_contact: bool = False
 
     def __post_init__(self):
         # Plain Python numbers: the search is hashed as a static argument.
@@ -167,8 +188,9 @@ class Search:
                 raise ValueError(f"{name} must be an int >= 1; got {getattr(self, name)!r}")
         if self.cells_above < 0:
             raise ValueError(f"cells_above must be an int >= 0; got {self.cells_above}")
-        if not isinstance(self.compact, bool):
-            raise ValueError(f"compact must be a bool; got {self.compact!r}")
+        for name in ("compact", "self_contact"):
+            if not isinstance(getattr(self, name), bool):
+                raise ValueError(f"{name} must be a bool; got {getattr(self, name)!r}")
         if self.compact and self.method == "exhaustive":
             raise ValueError(
                 'compact=True needs a bucket method ("auto", "binned", "dense"); '
@@ -185,6 +207,9 @@ class Search:
         x_prev: Array | None = None,
         mask: Array | None = None,
         at_least: SearchState | Sizes | None = None,
+        pool: Array | None = None,
+        slave_node: Array | None = None,
+        slave_body: Array | None = None,
     ) -> SearchState:
         """Measures the sizes from concrete data on the host and finds the candidates.
 
@@ -200,6 +225,13 @@ class Search:
             smaller than: to grow after an overflow without shrinking, or to
             size ahead of need for several configurations (allocate for
             each, passing the last state).
+          pool: optional bool[M]: segments masked now that may become real
+            later (a new free surface). They are sized for and listed among
+            the candidates as if real, so switching them on neither
+            overflows nor finds the candidates again; their nodes must be
+            where they will be (finite, indices in range) already.
+          slave_node, slave_body: the pair rule, as for ``closest``: the
+            compact form's capacity counts the contacts the rule lets through.
 
         Returns:
           A ``SearchState``. Its sizes are static: each distinct sizes
@@ -208,57 +240,72 @@ class Search:
         if self.radius is None and x_prev is None:
             raise ValueError("allocate needs x_prev= for a Search without a radius (paths only)")
         hint = "allocate once outside, or start a state inside with search.init(sizes=...)"
-        _bucket.require_concrete("Search.allocate", (x, surface, x_prev, mask), hint)
+        given = (x, surface, x_prev, mask, pool, slave_node, slave_body)
+        _bucket.require_concrete("Search.allocate", given, hint)
         batched = np.ndim(x) == 3
         if batched:
-            return self._allocate_batch(x, surface, x_prev, mask, at_least)
+            return self._allocate_batch(*given, at_least)
         x_prev, x, mask = _inputs.check_slaves(x, x_prev, mask)
         surface = _inputs.check_surface(surface, x.dtype)
+        pool = _inputs.check_mask("pool", pool, surface.segments.shape[0])
+        pairing = self._pairing(x, surface, mask, slave_node, slave_body)
         sizes = path_sizes = candidates = None
         overflow = jnp.zeros((), bool)
         if self.method != "exhaustive":
+            pooled = _inputs.with_pool(surface, pool)
             if self.radius is not None:
-                sizes = measure(x, surface, radius=self._reach, mask=mask, **self._sizing)
+                sizes = measure(x, pooled, radius=self._reach, mask=mask, **self._sizing)
                 sizes = self._merged(sizes, at_least, "sizes")
-                sizes = self._room(sizes, x, surface, mask, at_least)
-                candidates, overflow = self._find(x, surface, mask, sizes)
+                sizes = self._room(sizes, x, surface, mask, at_least, pairing)
+                candidates, overflow = self._find(x, surface, mask, sizes, pool)
             if x_prev is not None:
-                path_sizes = measure(x, surface, x_prev=x_prev, mask=mask, **self._sizing)
+                path_sizes = measure(x, pooled, x_prev=x_prev, mask=mask, **self._sizing)
                 path_sizes = self._merged(path_sizes, at_least, "path_sizes")
         return self._state(sizes, path_sizes, candidates, overflow, ())
 
-    def _allocate_batch(self, x, surface, x_prev, mask, at_least) -> SearchState:
+    def _pairing(self, x, surface, mask, slave_node, slave_body):
+        """The checked pair keywords of one (unbatched) call."""
+        return _inputs.check_pairing(
+            slave_node, slave_body, self.self_contact, x.shape[0], surface.nodes.shape[0], mask
+        )
+
+    def _allocate_batch(
+        self, x, surface, x_prev, mask, pool, slave_node, slave_body, at_least
+    ) -> SearchState:
         # A batch split over explicit mesh axes cannot be mapped over: whole.
-        x, surface, x_prev, mask = replicated((jnp.asarray(x), surface, x_prev, mask))
+        given = (jnp.asarray(x), surface, x_prev, mask, pool, slave_node, slave_body)
+        x, surface, x_prev, mask, pool, slave_node, slave_body = replicated(given)
         if x.shape[-1] != 2:
             raise ValueError(f"x must have shape (N, 2) or (B, N, 2); got shape {x.shape}")
-        # A mask, or a surface's segments and mask, may be shared by the batch.
         batch = x.shape[0]
-        if mask is not None and np.ndim(mask) == 1:
-            mask = jnp.broadcast_to(jnp.asarray(mask), x.shape[:2])
-        if np.ndim(surface.nodes) == 3:
-            segments = jnp.asarray(surface.segments)
-            if segments.ndim == 2:
-                segments = jnp.broadcast_to(segments, (batch,) + segments.shape)
-            segment_mask = surface.mask
-            if segment_mask is not None and np.ndim(segment_mask) == 1:
-                segment_mask = jnp.broadcast_to(jnp.asarray(segment_mask), segments.shape[:2])
-            surface = Surface(surface.nodes, segments, segment_mask)
-        axes = (0, 0 if np.ndim(surface.nodes) == 3 else None, None if mask is None else 0)
+        mask, slave_node, slave_body = (
+            _batched(name, values, 1, batch)
+            for name, values in (
+                ("mask", mask),
+                ("slave_node", slave_node),
+                ("slave_body", slave_body),
+            )
+        )
+        surface = _batched_surface(surface, batch)
+        pool = _batched("pool", pool, 1, batch)
+        pairing = Pairing(slave_node, slave_body, self.self_contact)
+        axes = (0, 0, None if mask is None else 0, jax.tree.map(lambda _: 0, pairing))
         sizes = path_sizes = candidates = None
         overflow = jnp.zeros(x.shape[:1], bool)
         if self.method != "exhaustive":
+            pooled = _inputs.with_pool(surface, pool)
             if self.radius is not None:
-                sizes = measure_batch(x, surface, radius=self._reach, mask=mask, **self._sizing)
+                sizes = measure_batch(x, pooled, radius=self._reach, mask=mask, **self._sizing)
                 sizes = self._merged(sizes, at_least, "sizes")
-                sizes = self._room(sizes, x, surface, mask, at_least, axes)
+                sizes = self._room(sizes, x, surface, mask, at_least, pairing, axes)
 
-                def find(x, surface, mask):
-                    return self._find(x, surface, mask, sizes)
+                def find(x, surface, mask, pool):
+                    return self._find(x, surface, mask, sizes, pool)
 
-                candidates, overflow = jax.vmap(find, in_axes=axes)(x, surface, mask)
+                find_axes = (0, 0, axes[2], None if pool is None else 0)
+                candidates, overflow = jax.vmap(find, in_axes=find_axes)(x, surface, mask, pool)
             if x_prev is not None:
-                path_sizes = measure_batch(x, surface, x_prev=x_prev, mask=mask, **self._sizing)
+                path_sizes = measure_batch(x, pooled, x_prev=x_prev, mask=mask, **self._sizing)
                 path_sizes = self._merged(path_sizes, at_least, "path_sizes")
         return self._state(sizes, path_sizes, candidates, overflow, x.shape[:1])
 
@@ -295,26 +342,27 @@ class Search:
             candidates=candidates,
             overflow=overflow,
             rebuilds=jnp.zeros(batch, jnp.int32),
+            last_rebuild=jnp.zeros(batch, jnp.int32),
             reach=None if self.radius is None else self._reach,
         )
 
-    def _find(self, x, surface, mask, sizes: Sizes):
+    def _find(self, x, surface, mask, sizes: Sizes, pool=None):
         """``(candidates or None, overflow)``: none are kept without a skin."""
         empty = x.shape[0] == 0 or surface.segments.shape[0] == 0
         if self.skin == 0 or empty:
             return None, jnp.zeros((), bool)
         reach = jnp.asarray(self._reach, x.dtype)
-        candidates = _bucket.find_jit(x, surface, reach, mask, sizes=sizes)
+        candidates = _bucket.find_jit(x, surface, reach, mask, sizes=sizes, pool=pool)
         return candidates, candidates.overflow
 
-    def _room(self, sizes: Sizes, x, surface, mask, at_least, axes=None) -> Sizes:
+    def _room(self, sizes: Sizes, x, surface, mask, at_least, pairing, axes=None) -> Sizes:
         """``sizes`` with the compact form's capacity measured (the largest over
         a batch, mapped over ``axes``), and at least ``at_least``'s; none
         (the dense form) for a search that is not compact."""
         if not self.compact:
             return dataclasses.replace(sizes, contact_capacity=0)
         measured = _bucket.measure_contacts(
-            x, surface, self.radius, mask, sizes, self.slack, axes=axes
+            x, surface, self.radius, mask, sizes, self.slack, axes=axes, pairing=pairing
         )
         return self._merged(measured, at_least, "sizes")
 
@@ -352,7 +400,15 @@ class Search:
     # -- traced -------------------------------------------------------------
 
     def closest(
-        self, state: SearchState, x: Array, surface: Surface, *, mask: Array | None = None
+        self,
+        state: SearchState,
+        x: Array,
+        surface: Surface,
+        *,
+        mask: Array | None = None,
+        radius=None,
+        slave_node: Array | None = None,
+        slave_body: Array | None = None,
     ) -> tuple[Contact | ContactList, SearchState]:
         """The closest master segment of every slave within ``radius``: one step.
 
@@ -365,19 +421,25 @@ class Search:
           x: f[N, 2] slave coordinates, N as allocated.
           surface: the master ``Surface``, of the allocated shapes.
           mask: optional bool[N], False for padding slaves.
+          radius: optional traced scalar or f[N] at or under ``search.radius``
+            (the default): a slave whose radius exceeds it sets ``overflow``
+            (the bucket methods).
+          slave_node, slave_body: the pair rule (``all_to_all``'s).
 
         Returns:
           ``(contact, state)``. ``contact`` equals ``all_to_all(x, surface,
-          radius=search.radius, mask=mask)`` whenever ``contact.overflow`` is
+          radius=radius, mask=mask, ...)`` whenever ``contact.overflow`` is
           False; when it is True, a contact may be missing: allocate again.
           A compact search returns a ``ContactList`` instead, whose
           ``to_contact(N)`` is that ``Contact``.
         """
         if self.radius is None:
             raise ValueError("closest needs a Search with a radius; this one searches paths only")
-        x, surface, radius, mask = _inputs.check_contact_inputs(x, surface, self.radius, mask)
+        radius = self.radius if radius is None else radius
+        x, surface, radius, mask = _inputs.check_contact_inputs(x, surface, radius, mask)
+        pairing = self._pairing(x, surface, mask, slave_node, slave_body)
         if self.method == "exhaustive":
-            return _dense._all_to_all(x, surface, radius, mask), state
+            return _dense._all_to_all(x, surface, radius, mask, pairing), state
         if state.sizes is None:
             raise ValueError(
                 "state has no closest-point sizes: make it with this search's allocate"
@@ -390,7 +452,7 @@ class Search:
                 "allocate with this search"
             )
         self._check_state(state, x, surface)
-        return _closest(self, state, x, surface, mask)
+        return _closest(self, state, x, surface, mask, radius, pairing)
 
     def _check_state(self, state: SearchState, x, surface: Surface):
         """The state was allocated by a search of this reach, for these shapes."""
@@ -423,21 +485,58 @@ class Search:
         surface: Surface,
         *,
         mask: Array | None = None,
+        slave_node: Array | None = None,
+        slave_body: Array | None = None,
     ) -> tuple[Crossing, SearchState]:
         """The first crossing of every slave's path ``x_prev -> x`` with the master.
 
         Returns:
           ``(crossing, state)``; ``crossing`` equals ``swept(x_prev, x,
-          surface, mask=mask)`` whenever ``crossing.overflow`` is False.
+          surface, mask=mask, ...)`` whenever ``crossing.overflow`` is False.
         """
+        pair_keywords = {
+            "slave_node": slave_node,
+            "slave_body": slave_body,
+            "self_contact": self.self_contact,
+        }
         if self.method == "exhaustive":
-            return _dense.swept(x_prev, x, surface, mask=mask), state
+            return _dense.swept(x_prev, x, surface, mask=mask, **pair_keywords), state
         if state.path_sizes is None:
             raise ValueError("state has no path sizes: allocate it with x_prev=")
         _check_unbatched(state, "swept")
         sizes = state.path_sizes
-        crossing = _bucket.sized_bucket_swept(x_prev, x, surface, mask=mask, sizes=sizes)
+        crossing = _bucket.sized_bucket_swept(
+            x_prev, x, surface, mask=mask, sizes=sizes, **pair_keywords
+        )
         return crossing, dataclasses.replace(state, overflow=state.overflow | crossing.overflow)
+
+
+def _batched(name: str, values, scene_ndim: int, batch: int):
+    """``values`` (one per scene, or shared by the batch) with a leading batch axis."""
+    if values is None:
+        return None
+    values = jnp.asarray(values)
+    if values.ndim == scene_ndim:
+        return jnp.broadcast_to(values, (batch,) + values.shape)
+    if values.ndim != scene_ndim + 1 or values.shape[0] != batch:
+        raise ValueError(
+            f"{name} must be shared by the batch ({scene_ndim} axes) or have a leading "
+            f"batch axis of {batch}; got shape {values.shape}"
+        )
+    return values
+
+
+def _batched_surface(surface: Surface, batch: int) -> Surface:
+    """``surface`` with every field batched: nodes, segments, mask and body may
+    each be shared by the batch or given per scene."""
+    if not isinstance(surface, Surface):
+        raise ValueError(f"surface must be a jaxcontact.Surface; got {type(surface).__name__}")
+    return Surface(
+        _batched("surface.nodes", surface.nodes, 2, batch),
+        _batched("surface.segments", surface.segments, 2, batch),
+        _batched("surface.mask", surface.mask, 1, batch),
+        _batched("surface.body", surface.body, 1, batch),
+    )
 
 
 def _check_unbatched(state: SearchState, method: str):
@@ -451,27 +550,38 @@ def _check_unbatched(state: SearchState, method: str):
 
 @functools.partial(jax.jit, static_argnums=0)
 @searched_whole(rows="x")
-def _closest(search: Search, state: SearchState, x, surface, mask):
+def _closest(search: Search, state: SearchState, x, surface, mask, radius, pairing):
     sizes = state.sizes
     reach = jnp.asarray(search._reach, x.dtype)
-    radius = jnp.asarray(search.radius, x.dtype)
+    # A radius past the bound the sizes were built for may miss a contact.
+    beyond = jnp.any(_inputs.rows_ok(x, mask) & (radius > search.radius))
+
+    def flagged(contact):
+        return contact._replace(overflow=contact.overflow | beyond)
+
     if state.candidates is None:  # no skin: the whole bucket sort, every step
-        contact = _bucket.contact_jit(x, surface, radius, mask, sizes=sizes)
+        contact = flagged(
+            _bucket.contact_jit(x, surface, radius, mask, sizes=sizes, pairing=pairing)
+        )
         return contact, dataclasses.replace(state, overflow=state.overflow | contact.overflow)
     stale = _bucket.expired(state.candidates, x, surface, mask, search.skin)
 
-    def find_again(x, surface, mask, _):
-        return _bucket.find(x, surface, reach, mask, sizes)
+    def find_again(x, surface, mask, candidates):
+        return _bucket.find(x, surface, reach, mask, sizes, candidates.pool)
 
     def keep(x, surface, mask, candidates):
         return candidates
 
-    candidates = jax.lax.cond(stale, find_again, keep, x, surface, mask, state.candidates)
-    contact = _bucket.contact_jit(x, surface, radius, mask, sizes=sizes, candidates=candidates)
+    candidates = jax.lax.cond(stale != 0, find_again, keep, x, surface, mask, state.candidates)
+    contact = _bucket.contact_jit(
+        x, surface, radius, mask, sizes=sizes, candidates=candidates, pairing=pairing
+    )
+    contact = flagged(contact)
     state = dataclasses.replace(
         state,
         candidates=candidates,
         overflow=state.overflow | contact.overflow,
-        rebuilds=state.rebuilds + stale.astype(jnp.int32),
+        rebuilds=state.rebuilds + (stale != 0).astype(jnp.int32),
+        last_rebuild=jnp.where(stale != 0, stale, state.last_rebuild),
     )
     return contact, state

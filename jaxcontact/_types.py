@@ -24,11 +24,18 @@ class Surface(NamedTuple):
     counter-clockwise has normals pointing out of it. A masked segment is
     padding: its indices may be anything (``-1``, say), as may the nodes
     only masked segments use.
+
+    ``body`` labels the outline each segment belongs to. With labels on the
+    slaves too (``slave_body=`` of every detector), a slave pairs only with
+    the segments of other bodies (and, with ``self_contact=True``, with its
+    own body's outside its neighbourhood along the outline): several
+    deformable bodies are searched in one call.
     """
 
     nodes: Array  # f[P, 2]  master node coordinates
     segments: Array  # i32[M, 2]  start and end node index of each segment
     mask: Array | None = None  # bool[M]  True for real segments; None means all real
+    body: Array | None = None  # i32[M]  body label of each segment; None: no labels
 
 
 class Contact(NamedTuple):
@@ -36,7 +43,11 @@ class Contact(NamedTuple):
 
     Rows that are not ``found`` (masked slaves, slaves farther than the radius
     from every real segment) hold zeros in ``gap``, ``xi``, ``point`` and
-    ``normal`` and ``-1`` in ``segment``; these zeros carry zero gradient.
+    ``normal`` and ``-1`` in ``segment`` and ``vertex``; these zeros carry
+    zero gradient. ``vertex`` is the closest feature: the master node when
+    the closest point is an end of the segment (decided by exact sign tests,
+    never from ``xi``, which may round to 1 inside the face), ``-1`` on the
+    face's interior.
     """
 
     gap: Array  # f[N]  signed gap; negative is penetration
@@ -44,6 +55,7 @@ class Contact(NamedTuple):
     segment: Array  # i32[N]  chosen segment, -1 where not found
     point: Array  # f[N, 2]  closest point on the chosen segment
     normal: Array  # f[N, 2]  outward unit normal of the chosen segment
+    vertex: Array  # i32[N]  master node at the closest point when it is an end, else -1
     found: Array  # bool[N]  a real segment lies within the radius
     active: Array  # bool[N]  found & (gap < 0)
     overflow: Array  # bool[]  a fixed capacity was too small; a contact may be missing
@@ -59,7 +71,7 @@ class ContactList(NamedTuple):
     differ). Found entries come first, in increasing ``node``; the entries
     after them are padding: ``node = N`` (one past the last slave, so
     ``x.at[node].add(f)`` and ``jax.ops.segment_sum(f, node, N)`` drop
-    them), ``segment = -1``, zeros elsewhere, ``found`` False. The capacity
+    them), ``segment = vertex = -1``, zeros elsewhere, ``found`` False. The capacity
     ``K`` is static (``Search(compact=True)`` measures it at ``allocate``);
     ``overflow`` is True when more entries were needed than it holds (the
     contacts found, and any slave at the radius to within rounding), and
@@ -72,6 +84,7 @@ class ContactList(NamedTuple):
     segment: Array  # i32[K]  the segment, -1 in padding entries
     point: Array  # f[K, 2]  closest point on the segment
     normal: Array  # f[K, 2]  outward unit normal of the segment
+    vertex: Array  # i32[K]  master node at the closest point when it is an end, else -1
     found: Array  # bool[K]  the entry holds a contact (False: padding)
     active: Array  # bool[K]  found & (gap < 0)
     overflow: Array  # bool[]  more contacts than entries: some are missing
@@ -89,6 +102,7 @@ class ContactList(NamedTuple):
             segment=put(self.segment, -1),
             point=put(self.point, 0),
             normal=put(self.normal, 0),
+            vertex=put(self.vertex, -1),
             found=put(self.found, False),
             active=put(self.active, False),
             overflow=self.overflow,

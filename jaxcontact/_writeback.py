@@ -19,7 +19,15 @@ def empty_contact(x: Array, overflow: Array) -> Contact:
     false = jnp.zeros(x.shape[:1], bool)
     minus_one = jnp.full(x.shape[:1], -1, jnp.int32)
     return Contact(
-        zeros, zeros, minus_one, jnp.zeros_like(x), jnp.zeros_like(x), false, false, overflow
+        gap=zeros,
+        xi=zeros,
+        segment=minus_one,
+        point=jnp.zeros_like(x),
+        normal=jnp.zeros_like(x),
+        vertex=minus_one,
+        found=false,
+        active=false,
+        overflow=overflow,
     )
 
 
@@ -34,6 +42,7 @@ def empty_contact_list(capacity: int, num_rows: int, dtype, overflow: Array) -> 
         segment=jnp.full((capacity,), -1, jnp.int32),
         point=jnp.zeros((capacity, 2), dtype),
         normal=jnp.zeros((capacity, 2), dtype),
+        vertex=jnp.full((capacity,), -1, jnp.int32),
         found=false,
         active=false,
         overflow=overflow,
@@ -76,6 +85,7 @@ def pack_found(result: Contact, rows: Array, capacity: int, num_rows: int) -> Co
         segment=take(result.segment, -1),
         point=take(result.point, 0),
         normal=take(result.normal, 0),
+        vertex=take(result.vertex, -1),
         found=valid,
         active=take(result.active, False),
         overflow=result.overflow | (count > capacity),

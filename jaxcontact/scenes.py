@@ -4,6 +4,11 @@ Every builder returns a ``Scene``: slave coordinates before and after the
 step (``x_prev`` equals ``x`` where nothing moves), the master ``Surface`` and
 the scene's search radius. Builders run in NumPy float64 and convert once to
 the requested dtype, so a float32 scene is the float64 scene rounded.
+
+The self-contact builders (``corner_outline``, ``folded_u``, ``curling_chip``,
+``two_blocks``) return a ``BodiesScene`` instead: deformable outlines whose
+every node is a slave, labelled by body, with the nodes that penetrate
+another part of the outline and their analytic depths.
 """
 
 from __future__ import annotations
@@ -142,3 +147,204 @@ def rough_die_scene(num_nodes: int, num_segments: int, *, dtype=jnp.float32) -> 
     die = np.stack([xs, 0.1 * np.sin(2 * np.pi * xs)], axis=-1)
     x = jnp.asarray(nodes, dtype)
     return Scene(x, x, _polyline(die, closed=False, dtype=dtype), 0.02)
+
+
+# Self-contact and several deformable bodies.
+
+
+class BodiesScene(NamedTuple):
+    """Deformable outlines whose every node is a slave: self-contact and several bodies."""
+
+    x: Array  # f[N, 2]  the slaves: every outline node (the same array as surface.nodes)
+    surface: Surface  # nodes = x, segments i32[M, 2] of the outlines
+    body: Array  # i32[M]  body label of each segment
+    slave_node: Array  # i32[N]  surface node of each slave: arange(N)
+    slave_body: Array  # i32[N]  body of each node
+    radius: float  # the scene's search radius
+    pressed: Array  # bool[N]  the node lies inside another part of the outline (or body)
+    depth: Array  # f[N]  its analytic penetration depth, > 0; 0 where not pressed, NaN if unknown
+
+
+def _surface(nodes: np.ndarray, segments: np.ndarray, body: np.ndarray, dtype) -> Surface:
+    """The ``Surface``, with its ``body`` labels where ``Surface`` has that field."""
+    parts = (jnp.asarray(nodes, dtype), jnp.asarray(segments, jnp.int32), None)
+    if "body" in Surface._fields:
+        return Surface(*parts, body=jnp.asarray(body, jnp.int32))
+    return Surface(*parts)
+
+
+def _bodies_scene(nodes, segments, node_body, radius, depth, dtype) -> BodiesScene:
+    """The ``BodiesScene`` of float64 nodes; ``pressed`` is ``depth != 0`` (NaN included)."""
+    segment_body = node_body[segments[:, 0]]
+    surface = _surface(nodes, segments, segment_body, dtype)
+    return BodiesScene(
+        x=surface.nodes,
+        surface=surface,
+        body=jnp.asarray(segment_body, jnp.int32),
+        slave_node=jnp.arange(len(nodes), dtype=jnp.int32),
+        slave_body=jnp.asarray(node_body, jnp.int32),
+        radius=float(radius),
+        pressed=jnp.asarray(depth != 0),
+        depth=jnp.asarray(depth, dtype),
+    )
+
+
+def _loop(count: int, first: int = 0) -> np.ndarray:
+    """i32[count, 2]: the segments of a closed outline of nodes ``first .. first + count - 1``."""
+    starts = np.arange(count)
+    return first + np.stack([starts, (starts + 1) % count], axis=-1).astype(np.int32)
+
+
+# An outline is traced along pieces, each a (length, at) pair: ``at(u)`` gives
+# the points at parameters u in [0, 1). A piece cut into n steps contributes its
+# start and n - 1 points inside; its end is the next piece's start.
+
+
+def _line(a, b):
+    a, b = np.asarray(a, np.float64), np.asarray(b, np.float64)
+    return float(np.linalg.norm(b - a)), lambda u: a + u[:, None] * (b - a)
+
+
+def _arc(centre, radius: float, start: float, stop: float):
+    """The arc from angle ``start`` to ``stop`` (radians; counter-clockwise when stop > start)."""
+    centre = np.asarray(centre, np.float64)
+
+    def at(u):
+        angle = start + u * (stop - start)
+        return centre + radius * np.stack([np.cos(angle), np.sin(angle)], axis=-1)
+
+    return radius * abs(stop - start), at
+
+
+def _polygon(corners) -> list:
+    """The pieces of the closed polygon through ``corners``."""
+    return [_line(a, b) for a, b in zip(corners, np.roll(np.asarray(corners), -1, axis=0))]
+
+
+def _trace(pieces, counts) -> np.ndarray:
+    """f64[sum(counts), 2]: piece ``k`` cut into ``counts[k]`` equal steps."""
+    return np.concatenate([at(np.arange(n) / n) for (_, at), n in zip(pieces, counts)])
+
+
+def corner_outline(*, fine: float = 0.05, coarse: float = 0.5, dtype=jnp.float32) -> BodiesScene:
+    """One undeformed body whose outline has 90 deg and 40 deg corners, convex and concave.
+
+    The closed counter-clockwise outline (mm), from the origin: the bottom
+    ``(0, 0) -> (8, 0)`` and the right side up to ``(8, 2.5)`` (coarse), a step
+    left to ``(5.5, 2.5)`` (fine; a 90 deg convex corner between coarse and
+    fine faces) and up to ``(5.5, 4.5)`` (coarse; a 90 deg concave corner), a
+    spike of 40 deg on the base ``[4, 5.5]`` with its apex at ``(4.75, 6.56)``
+    (fine), the top ``y = 4.5`` (fine) with a notch of 40 deg, 1.5 deep, whose
+    bottom is ``(2.25, 3)`` (fine), the rest of the top to ``(0, 4.5)`` and the
+    left side (coarse). Each face is cut into equal segments at most ``fine``
+    or ``coarse`` long. Apart from the two faces of a corner near that corner,
+    no two parts of the outline come closer than 1.2 mm.
+
+    Nothing is deformed: ``pressed`` is all False and ``depth`` all 0. The
+    radius is ``2 * fine``.
+
+    Example:
+      >>> corner_outline().x.shape
+      (270, 2)
+    """
+    half_spike = 0.75 / math.tan(math.radians(20))  # base half-width 0.75: apex at 40 deg
+    half_notch = 1.5 * math.tan(math.radians(20))  # 1.5 deep: opening of 40 deg
+    corners_and_steps = [
+        ((0.0, 0.0), coarse),
+        ((8.0, 0.0), coarse),
+        ((8.0, 2.5), fine),  # 90 deg convex
+        ((5.5, 2.5), coarse),  # 90 deg concave
+        ((5.5, 4.5), fine),
+        ((4.75, 4.5 + half_spike), fine),  # the spike's apex, 40 deg convex
+        ((4.0, 4.5), fine),
+        ((2.25 + half_notch, 4.5), fine),
+        ((2.25, 3.0), fine),  # the notch's bottom, 40 deg concave
+        ((2.25 - half_notch, 4.5), coarse),
+        ((0.0, 4.5), coarse),
+    ]
+    corners, steps = zip(*corners_and_steps)
+    pieces = _polygon(corners)
+    counts = [math.ceil(length / step - 1e-9) for (length, _), step in zip(pieces, steps)]
+    nodes = _trace(pieces, counts)
+    count = len(nodes)
+    return _bodies_scene(
+        nodes, _loop(count), np.zeros(count, np.int32), 2 * fine, np.zeros(count), dtype
+    )
+
+
+def _distance_to_segment(points: np.ndarray, a, b) -> np.ndarray:
+    """f64[N]: the distance from each point to the segment ``a -> b``."""
+    a, b = np.asarray(a, np.float64), np.asarray(b, np.float64)
+    t = np.clip((points - a) @ (b - a) / ((b - a) @ (b - a)), 0.0, 1.0)
+    return np.linalg.norm(points - (a + t[:, None] * (b - a)), axis=-1)
+
+
+def folded_u(
+    num_per_arm: int = 40, *, thickness: float = 0.5, depth: float = 0.05, dtype=jnp.float32
+) -> BodiesScene:
+    """A strip folded into a U whose upper arm is pressed into the lower one (self-contact).
+
+    One body, one closed counter-clockwise outline (mm). Two arms ``thickness``
+    thick over ``x in [0, 4]``, joined at ``x = 0`` by a half-circle centred on
+    ``(0, thickness + 0.1)``: the lower arm is ``[0, 4] x [0, thickness]``; the
+    upper arm's bottom face lies 0.2 above the lower arm's top face
+    (``y = thickness + 0.2``) except on ``x in [1.5, 3.5]``, where it has been
+    pushed down to ``y = thickness - depth``, with straight transitions over
+    ``[1.2, 1.5]`` and ``[3.5, 3.8]``; its top face follows ``thickness`` above.
+    The fold's inner half-circle has radius 0.1 (half the gap), the outer one
+    ``thickness + 0.1``. Each arm face is cut into about ``num_per_arm``
+    segments, steps of ``4 / num_per_arm`` in x with a node at every kink; the
+    ends and the half-circles are cut into steps of about that length.
+
+    ``pressed``: the upper arm's bottom-face nodes below the lower arm's top
+    face (``depth`` = their distance below it) and the lower arm's top-face
+    nodes above the upper arm's bottom face (``depth`` = their distance to
+    it: ``depth`` on the pushed stretch, less near its ends where the
+    transition is nearer). All depths are exact. Radius 0.1; away from the
+    fold gap no node comes within the radius of a segment that is not its
+    neighbour.
+
+    Example:
+      >>> folded_u().x.shape
+      (192, 2)
+    """
+    radius, gap, length = 0.1, 0.2, 4.0
+    if not thickness > 2 * radius:
+        raise ValueError(f"thickness {thickness} must exceed twice the radius {radius}")
+    if not 0 <= depth < thickness / 2:
+        raise ValueError(f"depth {depth} must lie in [0, thickness / 2)")
+    step = length / num_per_arm
+    t, y_gap, y_low = thickness, thickness + gap, thickness - depth
+    # The upper arm's bottom face, left to right; the other arm faces share its x.
+    bottom = np.array([(0, y_gap), (1.2, y_gap), (1.5, y_low), (3.5, y_low), (3.8, y_gap)])
+    bottom = np.concatenate([bottom, [(length, y_gap)]])
+    steps = [max(1, round(dx / step)) for dx in np.diff(bottom[:, 0])]
+    lower_bottom = bottom * [1, 0]
+    lower_top, upper_top = lower_bottom[::-1] + [0, t], bottom[::-1] + [0, t]
+    fold = (0.0, t + gap / 2)
+    pieces, counts = [], []
+    for face, face_steps in [(lower_bottom, steps), (lower_top, steps[::-1])]:
+        pieces += [_line(a, b) for a, b in zip(face[:-1], face[1:])] + [None]
+        counts += face_steps + [None]
+    pieces[len(steps)] = _line((length, 0), (length, t))  # the lower arm's end
+    pieces[-1] = _arc(fold, gap / 2, -math.pi / 2, -3 * math.pi / 2)  # the fold, inside
+    for face, face_steps in [(bottom, steps), (upper_top, steps[::-1])]:
+        pieces += [_line(a, b) for a, b in zip(face[:-1], face[1:])] + [None]
+        counts += face_steps + [None]
+    pieces[2 * len(steps) + 1 + len(steps)] = _line((length, y_gap), (length, y_gap + t))
+    pieces[-1] = _arc(fold, t + gap / 2, math.pi / 2, 3 * math.pi / 2)  # the fold, outside
+    counts = [n or max(1, round(piece[0] / step)) for piece, n in zip(pieces, counts)]
+    nodes = _trace(pieces, counts)
+
+    face = np.repeat(np.arange(len(pieces)) // (len(steps) + 1), counts)  # 0..3: arm faces
+    on_lower_top, on_upper_bottom = face == 1, face == 2
+    # A node on the lower arm's top face at a kink x of the upper bottom face is
+    # the start of a segment there, so comparing y at the same x is exact.
+    above = on_lower_top & (np.interp(nodes[:, 0], bottom[:, 0], bottom[:, 1]) < t)
+    near = [_distance_to_segment(nodes, a, b) for a, b in zip(bottom[1:4], bottom[2:5])]
+    node_depth = np.where(on_upper_bottom & (nodes[:, 1] < t), t - nodes[:, 1], 0.0)
+    node_depth = np.where(above, np.min(near, axis=0), node_depth)
+    count = len(nodes)
+    return _bodies_scene(
+        nodes, _loop(count), np.zeros(count, np.int32), radius, node_depth, dtype
+    )
