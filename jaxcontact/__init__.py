@@ -4,6 +4,7 @@ from jaxcontact._bucket import bucket_sort as bucket_sort
 from jaxcontact._bucket import bucket_swept as bucket_swept
 from jaxcontact._dense import all_to_all as all_to_all
 from jaxcontact._dense import swept as swept
+from jaxcontact._resume import resumable_scan as resumable_scan
 from jaxcontact._search import Search as Search
 from jaxcontact._search import SearchState as SearchState
 from jaxcontact._shard import contact_forces as contact_forces
@@ -15,4 +16,4 @@ from jaxcontact._types import Crossing as Crossing
 from jaxcontact._types import Surface as Surface
 from jaxcontact._validate import validate as validate
 
-__version__ = "0.2.0"
+__version__ = "0.3.0"

@@ -1,0 +1,98 @@
+"""A long ``lax.scan`` that outgrows its sizes resumes from its last good chunk.
+
+A ``Search``'s sizes are static: under ``jit`` a step that outgrows them can
+only say so (``overflow``, which stays set in the state). Checked once after
+a whole ``lax.scan``, an overflow at step 9,000 of 10,000 means allocating
+again and rerunning from step 0. ``resumable_scan`` runs the scan in chunks
+of ``chunk`` steps instead (one compiled program per chunk length and set of
+sizes), checks the carry's search states on the host after each chunk, and
+when one overflowed runs that chunk again from the carry it started with,
+after ``grow`` has allocated larger sizes: only the chunk that overflowed is
+repeated. A chunk's outputs are kept only once it ran without overflow, so
+the result is what one scan at large enough sizes returns.
+"""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxcontact._search import SearchState
+
+
+def _states(carry) -> list[SearchState]:
+    leaves = jax.tree.leaves(carry, is_leaf=lambda node: isinstance(node, SearchState))
+    return [leaf for leaf in leaves if isinstance(leaf, SearchState)]
+
+
+def _overflowed(carry) -> bool:
+    return any(bool(np.any(np.asarray(state.overflow))) for state in _states(carry))
+
+
+def resumable_scan(step, carry, xs=None, *, chunk: int, grow, length: int | None = None):
+    """``jax.lax.scan(step, carry, xs)`` in chunks; a chunk whose search
+    states overflowed is run again from its start, with larger sizes.
+
+    Args:
+      step: ``step(carry, x) -> (carry, y)``, as for ``lax.scan``.
+      carry: the initial carry, holding one or more ``SearchState`` (found
+        anywhere in the pytree), none of them overflowed.
+      xs: the scanned inputs, each with a leading axis of T steps, or None
+        with ``length``.
+      chunk: steps per chunk (static, >= 1). Each chunk is one compiled
+        ``lax.scan``; a last, shorter chunk compiles once more, so a
+        ``chunk`` that divides T compiles least.
+      grow: ``grow(carry) -> carry``, called on the host with the carry at
+        the start of a chunk that overflowed: it returns that carry with its
+        search states allocated again, large enough for the chunk
+        (``search.allocate(..., at_least=state)``; with ``slack`` to spare,
+        one regrowth usually covers many chunks). New sizes compile the
+        chunk's program anew.
+      length: T, when ``xs`` is None.
+
+    Returns:
+      ``(carry, ys, regrown)``: the final carry and the stacked outputs, as
+      ``lax.scan`` returns them, and the first step of each chunk that was
+      run again (a list of ints, in order).
+
+    Raises:
+      ValueError: when ``carry`` already holds an overflowed state, when
+        ``grow`` returns one, or on a bad ``chunk``.
+      RuntimeError: when a chunk still overflows after ``grow`` ran 8 times
+        in a row on it.
+    """
+    if isinstance(chunk, bool) or not isinstance(chunk, int) or chunk < 1:
+        raise ValueError(f"chunk must be an int >= 1; got {chunk!r}")
+    if not _states(carry):
+        raise ValueError("carry holds no jaxcontact SearchState: nothing can overflow")
+    if _overflowed(carry):
+        raise ValueError("carry holds an overflowed SearchState: allocate it again first")
+    leaves = jax.tree.leaves(xs)
+    if length is None:
+        if not leaves:
+            raise ValueError("resumable_scan needs xs with a leading axis, or length=")
+        length = int(np.shape(leaves[0])[0])
+    run = jax.jit(
+        lambda carry, part, size: jax.lax.scan(step, carry, part, length=size), static_argnums=2
+    )
+    outputs, regrown = [], []
+    for first in range(0, length, chunk):
+        size = min(chunk, length - first)
+        part = jax.tree.map(lambda values: values[first : first + size], xs)
+        after, ys = run(carry, part, size)
+        for _ in range(8):
+            if not _overflowed(after):
+                break
+            carry = grow(carry)
+            if _overflowed(carry):
+                raise ValueError("grow must return a carry whose search states have not overflowed")
+            regrown.append(first)
+            after, ys = run(carry, part, size)
+        else:
+            if _overflowed(after):
+                raise RuntimeError(f"the chunk from step {first} still overflows after 8 regrowths")
+        carry = after
+        outputs.append(ys)
+    ys = jax.tree.map(lambda *parts: jnp.concatenate(parts), *outputs) if outputs else None
+    return carry, ys, sorted(set(regrown))
