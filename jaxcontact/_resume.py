@@ -79,7 +79,7 @@ def resumable_scan(step, carry, xs=None, *, chunk: int, grow, length: int | None
     outputs, regrown = [], []
     for first in range(0, length, chunk):
         size = min(chunk, length - first)
-        part = jax.tree.map(lambda values: values[first : first + size], xs)
+        part = jax.tree.map(lambda values, at=slice(first, first + size): values[at], xs)
         after, ys = run(carry, part, size)
         for _ in range(8):
             if not _overflowed(after):

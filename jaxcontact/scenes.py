@@ -218,12 +218,14 @@ def _arc(centre, radius: float, start: float, stop: float):
 
 def _polygon(corners) -> list:
     """The pieces of the closed polygon through ``corners``."""
-    return [_line(a, b) for a, b in zip(corners, np.roll(np.asarray(corners), -1, axis=0))]
+    return [
+        _line(a, b) for a, b in zip(corners, np.roll(np.asarray(corners), -1, axis=0), strict=True)
+    ]
 
 
 def _trace(pieces, counts) -> np.ndarray:
     """f64[sum(counts), 2]: piece ``k`` cut into ``counts[k]`` equal steps."""
-    return np.concatenate([at(np.arange(n) / n) for (_, at), n in zip(pieces, counts)])
+    return np.concatenate([at(np.arange(n) / n) for (_, at), n in zip(pieces, counts, strict=True)])
 
 
 def corner_outline(*, fine: float = 0.05, coarse: float = 0.5, dtype=jnp.float32) -> BodiesScene:
@@ -237,15 +239,15 @@ def corner_outline(*, fine: float = 0.05, coarse: float = 0.5, dtype=jnp.float32
     (fine), the top ``y = 4.5`` (fine) with a notch of 40 deg, 1.5 deep, whose
     bottom is ``(2.25, 3)`` (fine), the rest of the top to ``(0, 4.5)`` and the
     left side (coarse). Each face is cut into equal segments at most ``fine``
-    or ``coarse`` long. Apart from the two faces of a corner near that corner,
-    no two parts of the outline come closer than 1.2 mm.
+    or ``coarse`` long. Faces that share no corner stay at least 1 mm apart,
+    so only the two faces of a corner come within the radius of each other.
 
     Nothing is deformed: ``pressed`` is all False and ``depth`` all 0. The
     radius is ``2 * fine``.
 
     Example:
       >>> corner_outline().x.shape
-      (270, 2)
+      (265, 2)
     """
     half_spike = 0.75 / math.tan(math.radians(20))  # base half-width 0.75: apex at 40 deg
     half_notch = 1.5 * math.tan(math.radians(20))  # 1.5 deep: opening of 40 deg
@@ -262,9 +264,11 @@ def corner_outline(*, fine: float = 0.05, coarse: float = 0.5, dtype=jnp.float32
         ((2.25 - half_notch, 4.5), coarse),
         ((0.0, 4.5), coarse),
     ]
-    corners, steps = zip(*corners_and_steps)
+    corners, steps = zip(*corners_and_steps, strict=True)
     pieces = _polygon(corners)
-    counts = [math.ceil(length / step - 1e-9) for (length, _), step in zip(pieces, steps)]
+    counts = [
+        math.ceil(length / step - 1e-9) for (length, _), step in zip(pieces, steps, strict=True)
+    ]
     nodes = _trace(pieces, counts)
     count = len(nodes)
     return _bodies_scene(
@@ -313,38 +317,162 @@ def folded_u(
         raise ValueError(f"thickness {thickness} must exceed twice the radius {radius}")
     if not 0 <= depth < thickness / 2:
         raise ValueError(f"depth {depth} must lie in [0, thickness / 2)")
-    step = length / num_per_arm
-    t, y_gap, y_low = thickness, thickness + gap, thickness - depth
-    # The upper arm's bottom face, left to right; the other arm faces share its x.
-    bottom = np.array([(0, y_gap), (1.2, y_gap), (1.5, y_low), (3.5, y_low), (3.8, y_gap)])
-    bottom = np.concatenate([bottom, [(length, y_gap)]])
-    steps = [max(1, round(dx / step)) for dx in np.diff(bottom[:, 0])]
-    lower_bottom = bottom * [1, 0]
-    lower_top, upper_top = lower_bottom[::-1] + [0, t], bottom[::-1] + [0, t]
-    fold = (0.0, t + gap / 2)
-    pieces, counts = [], []
-    for face, face_steps in [(lower_bottom, steps), (lower_top, steps[::-1])]:
-        pieces += [_line(a, b) for a, b in zip(face[:-1], face[1:])] + [None]
-        counts += face_steps + [None]
-    pieces[len(steps)] = _line((length, 0), (length, t))  # the lower arm's end
-    pieces[-1] = _arc(fold, gap / 2, -math.pi / 2, -3 * math.pi / 2)  # the fold, inside
-    for face, face_steps in [(bottom, steps), (upper_top, steps[::-1])]:
-        pieces += [_line(a, b) for a, b in zip(face[:-1], face[1:])] + [None]
-        counts += face_steps + [None]
-    pieces[2 * len(steps) + 1 + len(steps)] = _line((length, y_gap), (length, y_gap + t))
-    pieces[-1] = _arc(fold, t + gap / 2, math.pi / 2, 3 * math.pi / 2)  # the fold, outside
-    counts = [n or max(1, round(piece[0] / step)) for piece, n in zip(pieces, counts)]
-    nodes = _trace(pieces, counts)
-
-    face = np.repeat(np.arange(len(pieces)) // (len(steps) + 1), counts)  # 0..3: arm faces
-    on_lower_top, on_upper_bottom = face == 1, face == 2
-    # A node on the lower arm's top face at a kink x of the upper bottom face is
-    # the start of a segment there, so comparing y at the same x is exact.
-    above = on_lower_top & (np.interp(nodes[:, 0], bottom[:, 0], bottom[:, 1]) < t)
-    near = [_distance_to_segment(nodes, a, b) for a, b in zip(bottom[1:4], bottom[2:5])]
-    node_depth = np.where(on_upper_bottom & (nodes[:, 1] < t), t - nodes[:, 1], 0.0)
-    node_depth = np.where(above, np.min(near, axis=0), node_depth)
-    count = len(nodes)
-    return _bodies_scene(
-        nodes, _loop(count), np.zeros(count, np.int32), radius, node_depth, dtype
+    step, t = length / num_per_arm, thickness
+    y_gap, y_low = t + gap, t - depth
+    # The upper arm's bottom face, left to right, through its kinks.
+    bottom = np.array(
+        [(0, y_gap), (1.2, y_gap), (1.5, y_low), (3.5, y_low), (3.8, y_gap), (length, y_gap)]
     )
+    lower_bottom = bottom * [1, 0]
+    fold = (0.0, t + gap / 2)
+
+    def face(points, label):  # an arm face, steps of ``step`` in x between its kinks
+        return [
+            (_line(a, b), max(1, round(abs(b[0] - a[0]) / step)), label)
+            for a, b in zip(points[:-1], points[1:], strict=True)
+        ]
+
+    def other(piece):  # an end or a half-circle, steps of about ``step``
+        return [(piece, max(1, round(piece[0] / step)), 0)]
+
+    # Counter-clockwise from (0, 0); label 1: the lower arm's top face, 2: the
+    # upper arm's bottom face.
+    pieces, counts, labels = zip(
+        *face(lower_bottom, 0),
+        *other(_line((length, 0), (length, t))),
+        *face(lower_bottom[::-1] + [0, t], 1),
+        *other(_arc(fold, gap / 2, -math.pi / 2, -3 * math.pi / 2)),
+        *face(bottom, 2),
+        *other(_line((length, y_gap), (length, y_gap + t))),
+        *face(bottom[::-1] + [0, t], 0),
+        *other(_arc(fold, t + gap / 2, math.pi / 2, 3 * math.pi / 2)),
+        strict=True,
+    )
+    nodes = _trace(pieces, counts)
+    label = np.repeat(labels, counts)
+    # Lower top-face nodes share their x with the upper bottom face's nodes,
+    # kinks included, so the upper face's height there is exact.
+    upper_y = np.interp(nodes[:, 0], bottom[:, 0], bottom[:, 1])
+    to_upper = [
+        _distance_to_segment(nodes, a, b) for a, b in zip(bottom[1:4], bottom[2:5], strict=True)
+    ]
+    node_depth = np.where((label == 2) & (nodes[:, 1] < t), t - nodes[:, 1], 0.0)
+    node_depth = np.where((label == 1) & (upper_y < t), np.min(to_upper, axis=0), node_depth)
+    count = len(nodes)
+    return _bodies_scene(nodes, _loop(count), np.zeros(count, np.int32), radius, node_depth, dtype)
+
+
+def _counts(lengths: np.ndarray, total: int) -> np.ndarray:
+    """int[K]: steps per piece, proportional to ``lengths``, at least 1, ``total`` in all."""
+    share = lengths / lengths.sum() * total
+    counts = np.maximum(1, np.floor(share)).astype(int)
+    extra = np.argsort(counts - share)[: total - counts.sum()]  # the largest remainders
+    counts[extra] += 1
+    return counts
+
+
+def _unit(angle: float) -> np.ndarray:
+    return np.array([math.cos(angle), math.sin(angle)])
+
+
+def curling_chip(num_nodes: int, *, dtype=jnp.float32) -> BodiesScene:
+    """A workpiece after orthogonal cutting whose curled chip comes down onto its surface.
+
+    One body, one closed counter-clockwise outline (mm) of exactly
+    ``num_nodes`` nodes, about ``h`` apart (``h``: the outline's length over
+    ``num_nodes``; each straight or circular piece is cut into equal steps,
+    a node at every corner). The workpiece ``[0, 10] x [-2, 0]``: bottom,
+    sides and the machined surface ``y = 0``. A chip 0.3 thick rises from
+    ``x = 8`` on the surface, its centre line running 1 mm at 80 deg from the
+    x axis (along a rake face of 10 deg), then curling back counter-clockwise
+    by 190 deg round a radius of 1.5 until it heads straight down at
+    ``x = 5.2``; it drops vertically onto the surface and ends in a flat tip
+    0.3 wide at ``y = -h``. Near the tip the nodes are placed, not spaced: each
+    side of the chip has nodes at ``y = h / 2`` (outside, within the radius)
+    and ``y = -h / 4``, and the surface nodes keep at least ``h / 2`` from the
+    chip's sides. Radius ``2 h``.
+
+    ``pressed``: the chip-tip nodes below the surface (``depth = -y``: ``h`` on
+    the tip's end, ``h / 4`` on its sides) and the surface nodes under the
+    tip, inside the chip (``depth``: their distance to the tip's end, ``h``,
+    or to the nearer of its sides). All depths are exact.
+
+    Example:
+      >>> scene = curling_chip(10_000)
+      >>> scene.x.shape, scene.surface.segments.shape
+      ((10000, 2), (10000, 2))
+    """
+    if num_nodes < 100:
+        raise ValueError(f"num_nodes {num_nodes} < 100")
+    thick, bend, rake = 0.3, 1.5, math.radians(80)
+    root = thick / 2 / math.sin(rake)  # the root's half-width along the surface
+    centre = np.array([8.0, 0.0]) + _unit(rake) + bend * _unit(rake + math.pi / 2)
+    start, stop = rake - math.pi / 2, math.pi  # the arcs' angles round ``centre``
+    outer, inner = bend + thick / 2, bend - thick / 2
+    x_out, x_in, top = centre[0] - outer, centre[0] - inner, centre[1]
+
+    def outline(h):  # the pieces; those with a fixed number of steps say it
+        return [
+            (_line((0, -2), (10, -2)), None),
+            (_line((10, -2), (10, 0)), None),
+            (_line((10, 0), (8 + root, 0)), None),
+            (_line((8 + root, 0), centre + outer * _unit(start)), None),
+            (_arc(centre, outer, start, stop), None),
+            (_line((x_out, top), (x_out, h / 2)), None),  # the tip: down,
+            (_line((x_out, h / 2), (x_out, -h)), 2),
+            (_line((x_out, -h), (x_in, -h)), None),  # across,
+            (_line((x_in, -h), (x_in, h / 2)), 2),
+            (_line((x_in, h / 2), (x_in, top)), None),  # and up
+            (_arc(centre, inner, stop, start), None),
+            (_line(centre + inner * _unit(start), (8 - root, 0)), None),
+            (_line((8 - root, 0), (x_in + h / 2, 0)), None),
+            (_line((x_in + h / 2, 0), (x_out - h / 2, 0)), None),  # under the tip
+            (_line((x_out - h / 2, 0), (0, 0)), None),
+            (_line((0, 0), (0, -2)), None),
+        ]
+
+    h = sum(piece[0] for piece, _ in outline(0.0)) / num_nodes
+    pieces, fixed = zip(*outline(h), strict=True)
+    free = np.array([n is None for n in fixed])
+    counts = np.array([n or 0 for n in fixed])
+    lengths = np.array([length for length, _ in pieces])
+    counts[free] = _counts(lengths[free], num_nodes - counts.sum())
+    nodes = _trace(pieces, counts)
+    piece = np.repeat(np.arange(len(pieces)), counts)
+    x, y = nodes[:, 0], nodes[:, 1]
+    tip = (piece >= 6) & (piece <= 8) & (y < 0)
+    under = (piece == 13) & (x > x_out) & (x < x_in)
+    node_depth = np.where(tip, -y, 0.0)
+    node_depth = np.where(under, np.minimum(h, np.minimum(x - x_out, x_in - x)), node_depth)
+    return _bodies_scene(
+        nodes, _loop(num_nodes), np.zeros(num_nodes, np.int32), 2 * h, node_depth, dtype
+    )
+
+
+def two_blocks(n: int = 10, *, overlap: float = 0.05, dtype=jnp.float32) -> BodiesScene:
+    """Two deformable unit squares, the upper one pressed ``overlap`` into the lower one.
+
+    Body 0 is ``[0, 1] x [-1, 0]``; body 1 is ``[s, 1 + s] x [-overlap, 1 - overlap]``
+    with ``s = 1 / (2 n)``, half a node spacing, so that no corners and no
+    nodes of the facing faces coincide. Each is a closed counter-clockwise
+    outline from its lower-left corner, every side cut into ``n`` segments:
+    ``4 n`` nodes a body, body 0's first. Units mm.
+
+    ``pressed``: the nodes strictly inside the other square; ``depth``: their
+    distance to its outline (the nearest of its four sides), exact. Radius
+    ``max(2 overlap, 1 / n)``.
+
+    Example:
+      >>> two_blocks().x.shape
+      (80, 2)
+    """
+    shift = 1 / (2 * n)
+    lows = np.array([(0.0, -1.0), (shift, -overlap)])  # lower-left corner of each body
+    square = np.array([(0, 0), (1, 0), (1, 1), (0, 1)], np.float64)
+    nodes = np.concatenate([_trace(_polygon(low + square), [n] * 4) for low in lows])
+    node_body = np.repeat(np.arange(2, dtype=np.int32), 4 * n)
+    other = lows[1 - node_body]
+    inside = np.minimum(nodes - other, other + 1 - nodes).min(axis=-1)
+    segments = np.concatenate([_loop(4 * n), _loop(4 * n, 4 * n)])
+    radius = max(2 * overlap, 1 / n)
+    return _bodies_scene(nodes, segments, node_body, radius, np.maximum(inside, 0.0), dtype)

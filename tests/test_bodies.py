@@ -209,7 +209,7 @@ def test_chains_give_arc_length_along_every_outline_in_any_order():
     expected = oracle_chains(nodes, segments, mask)
     real = expected.real
     for i in np.flatnonzero(real):
-        same = (expected.chain[real] == expected.chain[i])
+        same = expected.chain[real] == expected.chain[i]
         np.testing.assert_array_equal(np.asarray(got.chain)[real] == int(got.chain[i]), same)
         # u runs from the chain's end: the oracle's s from its start.
         total = np.asarray(got.high)[real][same].max()
