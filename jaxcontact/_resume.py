@@ -43,12 +43,14 @@ def resumable_scan(step, carry, xs=None, *, chunk: int, grow, length: int | None
       chunk: steps per chunk (static, >= 1). Each chunk is one compiled
         ``lax.scan``; a last, shorter chunk compiles once more, so a
         ``chunk`` that divides T compiles least.
-      grow: ``grow(carry) -> carry``, called on the host with the carry at
-        the start of a chunk that overflowed: it returns that carry with its
-        search states allocated again, large enough for the chunk
-        (``search.allocate(..., at_least=state)``; with ``slack`` to spare,
-        one regrowth usually covers many chunks). New sizes compile the
-        chunk's program anew.
+      grow: ``grow(carry, xs_chunk) -> carry``, called on the host with the
+        carry at the start of a chunk that overflowed and that chunk's
+        inputs: it returns the carry with its search states allocated again,
+        large enough for the chunk (``search.allocate(..., at_least=state)``
+        at the configurations the chunk will reach, as far as the caller
+        can tell from its inputs; with ``slack`` to spare, one regrowth
+        usually covers many chunks). New sizes compile the chunk's program
+        anew.
       length: T, when ``xs`` is None.
 
     Returns:
@@ -84,7 +86,7 @@ def resumable_scan(step, carry, xs=None, *, chunk: int, grow, length: int | None
         for _ in range(8):
             if not _overflowed(after):
                 break
-            carry = grow(carry)
+            carry = grow(carry, part)
             if _overflowed(carry):
                 raise ValueError("grow must return a carry whose search states have not overflowed")
             regrown.append(first)
