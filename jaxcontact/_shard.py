@@ -101,6 +101,16 @@ def sharded(detector, mesh: Mesh, *, axis: str | None = None):
                 "sharded(...) returns the dense Contact: compact=True is not supported "
                 "(search the sharded arrays with Search(compact=True) instead)"
             )
+        per_row = [k for k in ("slave_node", "slave_body") if kwargs.get(k) is not None]
+        per_row += ["radius"] if np.ndim(kwargs.get("radius", 0)) else []
+        per_row += ["self_contact"] if kwargs.get("self_contact") else []
+        if per_row:
+            raise ValueError(
+                f"sharded(...) splits the slave arrays only: {', '.join(per_row)} "
+                "(the pair rule, a radius per slave) are not supported; pass the arrays "
+                "sharded with jax.sharding straight to the detector instead"
+            )
+        kwargs.pop("self_contact", None)
         *points, surface = args
         if not points:
             raise ValueError("sharded(detector) needs the slave arrays before the surface")
