@@ -15,9 +15,12 @@ def test_readme_example_runs():
     (example,) = re.findall(r"## Example\n\n```python\n(.*?)```", text, flags=re.S)
     assert "cutting_scene(81_939," in example
     example = example.replace("cutting_scene(81_939,", "cutting_scene(2_000,")
+    assert "curling_chip(10_000)" in example
+    example = example.replace("curling_chip(10_000)", "curling_chip(2_000)")
     namespace: dict = {}
     exec(compile(example, str(README), "exec"), namespace)
     assert int(namespace["contact"].found.sum()) > 0
+    assert int(namespace["own"].active.sum()) > 0
     assert namespace["grad"].shape == namespace["scene"].x.shape
 
 
@@ -46,6 +49,30 @@ def test_readme_batch_and_device_snippets_run():
     assert namespace["contacts"].gap.shape == (2, scenes[0].x.shape[0])
     assert not bool(namespace["contact"].overflow)
     assert namespace["on_tool"].shape == (2,)
+
+
+def test_readme_bodies_snippet_runs():
+    import jax.numpy as jnp
+
+    import jaxcontact
+    from jaxcontact.scenes import two_blocks
+
+    section = README.read_text().split("### Bodies, self-contact and a radius per slave")[1]
+    (snippet,) = re.findall(r"```python\n(.*?)```", section.split("\n### ")[0], flags=re.S)
+    scene = two_blocks()
+    reach = jnp.full(scene.x.shape[0], 0.8 * scene.radius, scene.x.dtype)
+    namespace = {
+        "jaxcontact": jaxcontact,
+        "R": scene.radius,
+        "x": scene.x,
+        "surface": scene.surface,
+        "nodes_of_slaves": scene.slave_node,
+        "bodies": scene.slave_body,
+        "reach": reach,
+    }
+    exec(compile(snippet, str(README), "exec"), namespace)
+    contact = namespace["entries"].to_contact(scene.x.shape[0])
+    assert int(contact.active.sum()) > 0
 
 
 @pytest.mark.simulation
