@@ -453,10 +453,11 @@ def two_blocks(n: int = 10, *, overlap: float = 0.05, dtype=jnp.float32) -> Bodi
     """Two deformable unit squares, the upper one pressed ``overlap`` into the lower one.
 
     Body 0 is ``[0, 1] x [-1, 0]``; body 1 is ``[s, 1 + s] x [-overlap, 1 - overlap]``
-    with ``s = 1 / (2 n)``, half a node spacing, so that no corners and no
-    nodes of the facing faces coincide. Each is a closed counter-clockwise
-    outline from its lower-left corner, every side cut into ``n`` segments:
-    ``4 n`` nodes a body, body 0's first. Units mm.
+    with ``s = 0.4 / n``, four tenths of a node spacing, so that no corners
+    and no nodes of the facing faces coincide (and, at the default overlap,
+    no pressed node is equally near two sides of the other square). Each is
+    a closed counter-clockwise outline from its lower-left corner, every side
+    cut into ``n`` segments: ``4 n`` nodes a body, body 0's first. Units mm.
 
     ``pressed``: the nodes strictly inside the other square; ``depth``: their
     distance to its outline (the nearest of its four sides), exact. Radius
@@ -466,7 +467,7 @@ def two_blocks(n: int = 10, *, overlap: float = 0.05, dtype=jnp.float32) -> Bodi
       >>> two_blocks().x.shape
       (80, 2)
     """
-    shift = 1 / (2 * n)
+    shift = 0.4 / n
     lows = np.array([(0.0, -1.0), (shift, -overlap)])  # lower-left corner of each body
     square = np.array([(0, 0), (1, 0), (1, 1), (0, 1)], np.float64)
     nodes = np.concatenate([_trace(_polygon(low + square), [n] * 4) for low in lows])

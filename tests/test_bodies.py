@@ -264,3 +264,65 @@ def test_self_contact_needs_slave_node_and_bad_pair_inputs_are_named():
     alone = all_to_all(x, surface, radius=0.1, slave_node=np.where(node < 44, node, -1))
     np.testing.assert_array_equal(traced.segment, alone.segment)
     assert jaxcontact.__version__ == "0.3.0"
+
+
+SELF_CONTACT = {
+    "all_to_all": lambda scene: all_to_all(
+        scene.x, scene.surface, radius=scene.radius, slave_node=scene.slave_node,
+        self_contact=True,
+    ),
+    "bucket_sort binned": lambda scene: bucket_sort(
+        scene.x, scene.surface, radius=scene.radius, slave_node=scene.slave_node,
+        self_contact=True,
+    ),
+    "Search compact": lambda scene: _search_self(scene),
+}  # fmt: skip
+
+
+def _search_self(scene):
+    search = Search(radius=scene.radius, skin=0.5 * scene.radius, self_contact=True, compact=True)
+    state = search.allocate(scene.x, scene.surface, slave_node=scene.slave_node)
+    step = jax.jit(
+        lambda state, x: search.closest(state, x, scene.surface, slave_node=scene.slave_node)
+    )
+    entries, state = step(state, scene.x)
+    assert not bool(state.overflow)
+    return entries.to_contact(scene.x.shape[0])
+
+
+@pytest.mark.parametrize("detector", SELF_CONTACT)
+def test_self_contact_reports_exactly_the_pressed_nodes_and_nothing_at_corners(detector):
+    from jaxcontact.scenes import corner_outline, curling_chip, folded_u
+
+    detect = SELF_CONTACT[detector]
+    # Convex and concave corners of 90 and 40 degrees, fine and coarse: nothing.
+    corners = corner_outline(dtype=FLOAT)
+    contact = detect(corners)
+    assert int(contact.active.sum()) == 0
+    # Without the neighbourhood rule the corners report false contact.
+    plain = all_to_all(
+        corners.x, corners.surface, radius=corners.radius, slave_node=corners.slave_node
+    )
+    assert int(plain.active.sum()) > 0
+    # A folded U pressed into itself: exactly the pressed nodes, at their depth,
+    # against the other arm.
+    fold = folded_u(dtype=FLOAT)
+    contact = detect(fold)
+    pressed = np.asarray(fold.pressed)
+    np.testing.assert_array_equal(np.asarray(contact.active), pressed)
+    depth = np.asarray(fold.depth)
+    exact = pressed & np.isfinite(depth)
+    np.testing.assert_allclose(
+        -np.asarray(contact.gap)[exact], depth[exact], atol=local_atol(FLOAT, 8.0)
+    )
+    # Against the other arm: its face's normal opposes the slave's own face's.
+    nodes, segments = np.asarray(fold.surface.nodes), np.asarray(fold.surface.segments)
+    starting = np.full(len(nodes), -1)
+    starting[segments[:, 0]] = np.arange(len(segments))
+    own = nodes[segments[starting, 1]] - nodes[segments[starting, 0]]
+    own_normal = np.stack([own[:, 1], -own[:, 0]], -1)
+    assert np.all(np.sum(np.asarray(contact.normal) * own_normal, axis=-1)[pressed] < 0)
+    # A chip curling onto the machined surface is caught.
+    chip = curling_chip(2_000, dtype=FLOAT)
+    contact = detect(chip)
+    np.testing.assert_array_equal(np.asarray(contact.active), np.asarray(chip.pressed))
