@@ -38,7 +38,7 @@ from jaxcontact._geometry import first_hit_time, squared_distance
 from jaxcontact._inputs import Segments, reach_of
 from jaxcontact._lowest import one_scene_at_a_time
 from jaxcontact._narrow import Queries, choose, in_stages
-from jaxcontact._padded import cut_entries, cut_rows, pad_scene
+from jaxcontact._padded import cut_entries, cut_rows, pad_contact_scene, pad_scene
 from jaxcontact._pairs import NO_PAIRING, Pairing, pick, ruled, tag
 from jaxcontact._placement import searched_whole
 from jaxcontact._sizes import CELLS_ABOVE, Sizes, grow, measure
@@ -386,8 +386,8 @@ def _check_pairing(pair_keywords: dict, x, surface: Surface, mask) -> Pairing:
         pair_keywords.get("slave_node"),
         pair_keywords.get("slave_body"),
         pair_keywords.get("self_contact", False),
-        x.shape[0],
-        surface.nodes.shape[0],
+        x,
+        surface,
         mask,
     )
 
@@ -504,16 +504,12 @@ def bucket_sort(
       True
     """
     x, surface, radius, mask = _inputs.check_contact_inputs(x, surface, radius, mask)
-    pairing = _inputs.check_pairing(
-        slave_node, slave_body, self_contact, x.shape[0], surface.nodes.shape[0], mask
-    )
+    pairing = _inputs.check_pairing(slave_node, slave_body, self_contact, x, surface, mask)
     require_concrete("bucket_sort", (x, surface, radius, mask, pairing))
     use_cells = surface.segments.shape[0] > CELLS_ABOVE
-    per_row = radius if radius.ndim else None
-    (x,), mask, surface, (per_row, pairing), num_rows = pad_scene(
-        (x,), mask, surface, (per_row, pairing)
+    x, mask, surface, radius, pairing, num_rows = pad_contact_scene(
+        x, mask, surface, radius, pairing
     )
-    radius = radius if per_row is None else per_row
     sizes = measure(x, surface, radius=reach_of(radius, mask), mask=mask, use_cells=use_cells)
     if compact:
         sizes = room_for_every_slot(sizes)
@@ -549,9 +545,7 @@ def bucket_swept(
     """
     x_prev, x, mask = _inputs.check_path_inputs(x_prev, x, mask)
     surface = _inputs.check_surface(surface, x_prev.dtype)
-    pairing = _inputs.check_pairing(
-        slave_node, slave_body, self_contact, x.shape[0], surface.nodes.shape[0], mask
-    )
+    pairing = _inputs.check_pairing(slave_node, slave_body, self_contact, x, surface, mask)
     require_concrete("bucket_swept", (x_prev, x, surface, mask, pairing))
     use_cells = surface.segments.shape[0] > CELLS_ABOVE
     (x_prev, x), mask, surface, pairing, num_rows = pad_scene((x_prev, x), mask, surface, pairing)

@@ -18,7 +18,7 @@ from jaxcontact._geometry import first_hit_time, squared_distance
 from jaxcontact._inputs import Segments
 from jaxcontact._lowest import one_scene_at_a_time
 from jaxcontact._narrow import in_stages, search_all, vmapped
-from jaxcontact._padded import cut_rows, pad_scene
+from jaxcontact._padded import cut_rows, pad_contact_scene, pad_scene
 from jaxcontact._pairs import NO_PAIRING, Pairing, ruled, tag
 from jaxcontact._placement import searched_whole
 from jaxcontact._types import Array, Contact, Crossing, Surface
@@ -70,14 +70,10 @@ def all_to_all(
       ([0.25, -0.125], [False, True], [[0.0, 1.0], [0.0, 1.0]])
     """
     x, surface, radius, mask = _inputs.check_contact_inputs(x, surface, radius, mask)
-    pairing = _inputs.check_pairing(
-        slave_node, slave_body, self_contact, x.shape[0], surface.nodes.shape[0], mask
+    pairing = _inputs.check_pairing(slave_node, slave_body, self_contact, x, surface, mask)
+    x, mask, surface, radius, pairing, num_rows = pad_contact_scene(
+        x, mask, surface, radius, pairing
     )
-    per_row = radius if radius.ndim else None
-    (x,), mask, surface, (per_row, pairing), num_rows = pad_scene(
-        (x,), mask, surface, (per_row, pairing)
-    )
-    radius = radius if per_row is None else per_row
     return cut_rows(_all_to_all(x, surface, radius, mask, pairing), num_rows)
 
 
@@ -197,9 +193,7 @@ def swept(
     """
     x_prev, x, mask = _inputs.check_path_inputs(x_prev, x, mask)
     surface = _inputs.check_surface(surface, x.dtype)
-    pairing = _inputs.check_pairing(
-        slave_node, slave_body, self_contact, x.shape[0], surface.nodes.shape[0], mask
-    )
+    pairing = _inputs.check_pairing(slave_node, slave_body, self_contact, x, surface, mask)
     (x_prev, x), mask, surface, pairing, num_rows = pad_scene((x_prev, x), mask, surface, pairing)
     return cut_rows(_swept(x_prev, x, surface, mask, pairing), num_rows)
 

@@ -183,8 +183,9 @@ def check_labels(name: str, labels, length: int, symbol: str = "N"):
     return jnp.asarray(xp.where(fits, labels, -1).astype(np.int32))
 
 
-def check_pairing(slave_node, slave_body, self_contact, num_rows: int, num_nodes: int, mask):
-    """Checks the pair keywords of a detector; returns a ``_pairs.Pairing``."""
+def check_pairing(slave_node, slave_body, self_contact, x, surface: Surface, mask):
+    """Checks the pair keywords of a detector for checked slaves ``x``, master
+    ``surface`` and slave ``mask``; returns a ``_pairs.Pairing``."""
     from jaxcontact._pairs import Pairing
 
     if not isinstance(self_contact, bool):
@@ -194,6 +195,7 @@ def check_pairing(slave_node, slave_body, self_contact, num_rows: int, num_nodes
             "self_contact=True needs slave_node= (i32[N]: the surface node each slave is, "
             "-1 for none): a slave's neighbourhood is measured from its own node"
         )
+    num_rows, num_nodes = x.shape[0], surface.nodes.shape[0]
     slave_node = check_labels("slave_node", slave_node, num_rows)
     slave_body = check_labels("slave_body", slave_body, num_rows)
     if slave_node is not None and _is_concrete(slave_node) and _is_concrete(mask):

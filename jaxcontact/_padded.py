@@ -139,6 +139,16 @@ def pad_scene(slaves: tuple, mask, surface: Surface, extras=None):
     return *padded, num_rows
 
 
+def pad_contact_scene(x, mask, surface: Surface, radius, pairing):
+    """``pad_scene`` for a closest-point query: ``(x, mask, surface, radius,
+    pairing, num_rows)``, with a radius per slave padded as the rows are."""
+    per_row = radius if np.ndim(radius) else None
+    (x,), mask, surface, (per_row, pairing), num_rows = pad_scene(
+        (x,), mask, surface, (per_row, pairing)
+    )
+    return x, mask, surface, radius if per_row is None else per_row, pairing, num_rows
+
+
 @functools.partial(jax.jit, static_argnames="num_rows")
 def _first_rows(result, num_rows: int):
     return jax.tree.map(lambda values: values[:num_rows] if values.ndim else values, result)

@@ -265,9 +265,7 @@ class Search:
 
     def _pairing(self, x, surface, mask, slave_node, slave_body):
         """The checked pair keywords of one (unbatched) call."""
-        return _inputs.check_pairing(
-            slave_node, slave_body, self.self_contact, x.shape[0], surface.nodes.shape[0], mask
-        )
+        return _inputs.check_pairing(slave_node, slave_body, self.self_contact, x, surface, mask)
 
     def _allocate_batch(
         self, x, surface, x_prev, mask, pool, slave_node, slave_body, at_least
@@ -317,14 +315,17 @@ class Search:
         sizes: Sizes | None,
         path_sizes: Sizes | None = None,
         mask: Array | None = None,
+        pool: Array | None = None,
     ) -> SearchState:
         """A fresh state with known sizes (from an earlier ``allocate``), under ``jit`` too.
 
         For a run that starts inside a compiled program: its sizes are static
-        (``state.sizes``, hashable), the candidates are found here.
+        (``state.sizes``, hashable), the candidates are found here (with the
+        masked segments of ``pool`` listed, as ``allocate`` lists them).
         """
         _, x, mask = _inputs.check_slaves(x, None, mask)
         surface = _inputs.check_surface(surface, x.dtype)
+        pool = _inputs.check_mask("pool", pool, surface.segments.shape[0])
         candidates, overflow = None, jnp.zeros((), bool)
         if sizes is not None and self.radius is None:
             raise ValueError(
@@ -332,7 +333,7 @@ class Search:
             )
         if sizes is not None:
             _bucket.check_sizes(sizes, x.shape[0], for_paths=False)
-            candidates, overflow = self._find(x, surface, mask, sizes)
+            candidates, overflow = self._find(x, surface, mask, sizes, pool)
         return self._state(sizes, path_sizes, candidates, overflow, ())
 
     def _state(self, sizes, path_sizes, candidates, overflow, batch) -> SearchState:

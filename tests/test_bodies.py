@@ -218,21 +218,71 @@ def test_chains_give_arc_length_along_every_outline_in_any_order():
     assert np.isinf(expected.loop[real]).sum() == 6 + 3  # the cut loop and the open chain
 
 
-def test_self_contact_gradients_are_finite_and_match_finite_differences():
+@pytest.mark.parametrize("self_contact", [False, True])
+def test_gradients_with_both_bodies_deformable_are_finite_and_match_finite_differences(
+    self_contact,
+):
     from jax.test_util import check_grads
 
-    x, surface, slave_node, slave_body = two_rings(jnp.float64 if FLOAT is np.float64 else FLOAT)
+    x, surface, slave_node, slave_body = two_rings()
     segments, body = surface.segments, surface.body
 
     def energy(nodes):
         both = Surface(nodes, segments, body=body)
-        contact = all_to_all(nodes, both, radius=0.3, slave_node=slave_node, self_contact=True)
+        contact = all_to_all(
+            nodes, both, radius=0.3, slave_node=slave_node, slave_body=slave_body,
+            self_contact=self_contact,
+        )  # fmt: skip
         return jnp.sum(jnp.where(contact.active, contact.gap, 0) ** 2)
 
     grad = jax.grad(energy)(x)
     assert np.all(np.isfinite(np.asarray(grad))) and float(jnp.abs(grad).max()) > 0
+    # Both bodies' nodes move the energy: as slaves and as ends of master segments.
+    first = np.asarray(slave_body) == 0
+    assert float(jnp.abs(grad[first]).max()) > 0 and float(jnp.abs(grad[~first]).max()) > 0
     if FLOAT is np.float64:
         check_grads(energy, (x,), order=1, modes=["rev"], eps=1e-6, atol=1e-5, rtol=1e-4)
+
+
+def test_pair_keywords_under_vmap_and_lax_scan_in_a_search():
+    """A batch of two scenes (shared slave nodes and bodies) searched with one
+    allocation under vmap, and a scan of steps pressing the bodies together."""
+    x, surface, slave_node, slave_body = two_rings()
+    keywords = {"slave_node": slave_node, "slave_body": slave_body}
+    shifts = jnp.asarray(np.linspace(0.0, 0.1, 4), x.dtype)
+    moving = jnp.asarray(slave_body == 1)[:, None] * jnp.array([-1.0, 0.0], x.dtype)
+
+    def at(shift):
+        return x + shift * moving
+
+    search = Search(radius=0.3, skin=0.05, method="binned", compact=True, slack=2.0)
+    xs = jnp.stack([at(shifts[0]), at(shifts[-1])])
+    surfaces = Surface(xs, surface.segments, body=surface.body)
+    state = search.allocate(xs, surfaces, **keywords)
+    axes = (0, 0, Surface(0, None, None, None))
+    close = jax.vmap(lambda s, y, f: search.closest(s, y, f, **keywords), in_axes=axes)
+    entries, _ = close(state, xs, surfaces)
+    for b in range(2):
+        one = jax.tree.map(lambda v, b=b: v[b], entries).to_contact(x.shape[0])
+        expected = all_to_all(xs[b], surfaces._replace(nodes=xs[b]), radius=0.3, **keywords)
+        np.testing.assert_array_equal(one.active, expected.active)
+
+    single = jax.tree.map(lambda v: v[1], state)
+
+    def step(state, shift):
+        y = at(shift)
+        entries, state = search.closest(
+            state, y, Surface(y, surface.segments, body=surface.body), **keywords
+        )
+        return state, entries.to_contact(x.shape[0]).active
+
+    final, active = jax.lax.scan(step, single, shifts)
+    assert not bool(final.overflow)
+    for t, shift in enumerate(shifts):
+        y = at(shift)
+        expected = all_to_all(y, surface._replace(nodes=y), radius=0.3, **keywords)
+        np.testing.assert_array_equal(active[t], expected.active)
+    assert int(active[-1].sum()) > int(active[0].sum())
 
 
 def test_self_contact_needs_slave_node_and_bad_pair_inputs_are_named():
@@ -263,6 +313,9 @@ def test_self_contact_needs_slave_node_and_bad_pair_inputs_are_named():
     traced = jax.jit(lambda n: all_to_all(x, surface, radius=0.1, slave_node=n))(node)
     alone = all_to_all(x, surface, radius=0.1, slave_node=np.where(node < 44, node, -1))
     np.testing.assert_array_equal(traced.segment, alone.segment)
+    mesh = jax.make_mesh((1,), ("slaves",))
+    with pytest.raises(ValueError, match="sharded.* splits the slave arrays only: slave_node"):
+        jaxcontact.sharded(all_to_all, mesh)(x, surface, radius=0.1, slave_node=slave_node)
     assert jaxcontact.__version__ == "0.3.0"
 
 
