@@ -76,6 +76,7 @@ SECTIONS = {
         ("--out", "{out}"),
         "{out}/long_process.md",
     ),
+    "bodies": Section("Bodies, self-contact and a radius per slave", "bodies.py"),
 }
 VERSIONED = (
     "jax",

@@ -1,0 +1,710 @@
+"""Self-contact, several deformable bodies in one call, and a radius per slave.
+
+Three parts, float32, every step jitted and compiled ahead of the runs (its
+compile time reported apart), two warm-up runs, then the median and the
+10th-90th percentile of ``--repeats`` rounds, the methods of one part run
+round-robin in this one process (``jaxcontact.bench.timing.time_interleaved``),
+every call ended by ``block_until_ready``:
+
+1. **Self-contact** of the curling chip (``scenes.curling_chip``: one closed
+   outline whose every node is a slave, radius ``2 h``) at 10^4 and 10^5
+   nodes: ``Search(self_contact=True).closest`` (the dense ``Contact`` and the
+   compact ``ContactList``) beside the plain ``Search.closest`` on the same
+   nodes and radius without the pair rule (every node then finds its own
+   segments). References: ``all_to_all(..., self_contact=True)`` (and the
+   plain ``all_to_all``, the rule's cost there) where N * M <= 2e8 pairs,
+   and a float64 NumPy brute force of the same rule written here
+   (``brute_force``: own node, arc-length window of ``4 r`` along the
+   outline, ``docs/contract.md``) on a random sample of 2,000 slaves, its
+   time per slave extrapolated to N. Checked: the active nodes equal the
+   scene's analytic ``pressed`` set; the search's answer equals
+   ``all_to_all``'s on every row (segment, found, vertex; gaps to 1e-5) and
+   the brute force's on the sample plus every row the search finds
+   (segment, found; gaps to 1e-5).
+2. **Two bodies in one call**: ``scenes.two_blocks(n)``, the upper block
+   pressed ``2 / n`` into the lower one (radius ``4 / n``, two node
+   spacings of depth at most), ``8 n`` nodes. One ``Search.closest`` over the
+   union with ``slave_body`` and ``surface.body``, against what a user wrote
+   before: two searches in one jitted step, each body's nodes against the
+   other body's outline alone (two ``Search`` states), and ``all_to_all``
+   with the labels. Checked: the three answers agree row for row (segments
+   mapped to the union's numbering) and the active nodes equal ``pressed``.
+3. **A radius per slave** on the cutting scene (81,939 nodes, tool tip at
+   ``x = 18``): ``Search(radius=0.1).closest(..., radius=r)`` with ``r`` f[N]
+   uniform in [0.05, 0.1], the same call with the traced scalar 0.1, and
+   ``all_to_all`` with the f[N] radius (the reference). Traces of the jitted
+   step are counted over calls with new radii.
+
+    python benchmarks/bodies.py                 # full sizes, about 5 minutes on 2 cores
+    taskset -c 0 python benchmarks/bodies.py    # pinned to one core
+    python benchmarks/bodies.py --quick         # small sizes, a smoke test
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxcontact import Contact, Search, Surface, all_to_all
+from jaxcontact.bench._run import machine
+from jaxcontact.bench.timing import time_interleaved
+from jaxcontact.scenes import curling_chip, cutting_scene, two_blocks
+
+DENSE_PAIRS = 2e8  # all_to_all runs at or below this many pairs
+GAP_TOLERANCE = 1e-5
+REACH = 4.0  # the self-contact window in radii (jaxcontact._pairs.SELF_CONTACT_REACH)
+
+
+# -- a float64 NumPy brute force of the pair rule, written from the contract ----
+
+
+def outline_arcs(nodes: np.ndarray, segments: np.ndarray):
+    """Chains of segments joined end to start, walked on the host.
+
+    Returns ``(chain, order, closed)``, per segment: its chain (the index of
+    the segment the walk began at: an open chain's first, a loop's lowest),
+    its position along the chain from there, and whether the chain is a
+    closed loop. Segment ``j`` follows ``k`` when it starts at ``k``'s end
+    node (the lowest such ``j``). Topology only: ``arc_lengths`` turns it
+    into arc coordinates from the current node positions.
+    """
+    num_segments, num_nodes = len(segments), len(nodes)
+    first_start = np.full(num_nodes, num_segments, np.int64)
+    np.minimum.at(first_start, segments[:, 0], np.arange(num_segments))
+    successor = first_start[segments[:, 1]]
+    successor[successor == num_segments] = -1
+    has_predecessor = np.zeros(num_segments, bool)
+    has_predecessor[successor[successor >= 0]] = True
+    chain = np.full(num_segments, -1, np.int64)
+    order = np.zeros(num_segments, np.int64)  # position along its chain
+    closed = np.zeros(num_segments, bool)
+    starts = [*np.flatnonzero(~has_predecessor), *range(num_segments)]  # open chains first
+    for head in starts:
+        if chain[head] >= 0:
+            continue
+        k, position = head, 0
+        while k >= 0 and chain[k] < 0:
+            chain[k], order[k] = head, position
+            k, position = successor[k], position + 1
+        closed[chain == head] = k == head
+    return chain, order, closed
+
+
+def arc_lengths(nodes: np.ndarray, segments: np.ndarray, topology):
+    """``(low, high, loop, node_chain, node_arc)`` of the walked chains, in float64."""
+    chain, order, closed = topology
+    length = np.linalg.norm(nodes[segments[:, 1]] - nodes[segments[:, 0]], axis=-1)
+    walk = np.lexsort((order, chain))  # chain by chain, each from its head
+    along = length[walk]
+    before = np.cumsum(along) - along  # arc length before each, from the walk's start
+    first = np.r_[True, chain[walk][1:] != chain[walk][:-1]]
+    head = np.maximum.accumulate(np.where(first, np.arange(len(walk)), 0))
+    low = np.empty(len(segments))
+    low[walk] = before - before[head]
+    total = np.zeros(len(segments))
+    np.add.at(total, chain, length)  # summed at each chain's head index
+    loop = np.where(closed, total[chain], np.inf)
+    node_chain = np.full(len(nodes), -1, np.int64)
+    node_arc = np.zeros(len(nodes))
+    # A node's coordinate: the start of the segment leaving it, or the end of the one entering.
+    node_chain[segments[:, 1]], node_arc[segments[:, 1]] = chain, low + length
+    node_chain[segments[:, 0]], node_arc[segments[:, 0]] = chain, low
+    return low, low + length, loop, node_chain, node_arc
+
+
+def brute_force(
+    x,
+    nodes,
+    segments,
+    rows,
+    radius,
+    *,
+    slave_node=None,
+    slave_body=None,
+    body=None,
+    self_contact=False,
+    topology=None,
+    chunk=64,
+):
+    """Float64 closest allowed segment of slaves ``rows``: (segment, found, gap, distance).
+
+    Every pair's squared distance ``|w - q d|^2`` (``w = x - a``, ``q`` the
+    clamped projection) is computed; the pairs within 1.01 times the slave's
+    radius are then measured exactly (the clamps from the signs of
+    ``(x - a).d`` and ``(x - b).d``, an end point taken as the node itself)
+    and put to the rule as the contract states it: a slave never meets a
+    segment ending at its own node; with bodies and without self-contact only
+    other bodies' segments; with self-contact every segment except its own
+    chain's within arc length ``4 r`` of its node (the shorter way round a
+    loop). The nearest allowed pair wins, exact ties to the lower index; it
+    is found within the radius. ``distance`` is its distance, inf where no
+    allowed pair lies within 1.01 times the radius.
+    """
+    x, nodes = np.asarray(x, np.float64), np.asarray(nodes, np.float64)
+    segments = np.asarray(segments, np.int64)
+    rows = np.asarray(rows)
+    radius = np.broadcast_to(np.asarray(radius, np.float64), (len(x),))
+    a, b = nodes[segments[:, 0]], nodes[segments[:, 1]]
+    d = b - a
+    dd = np.sum(d * d, axis=-1)
+    reach = (1.01 * radius[rows]) ** 2
+    near_rows, near_segments = [], []
+    for start in range(0, len(rows), chunk):
+        p = x[rows[start : start + chunk]]
+        wx = p[:, :1] - a[:, 0]
+        wy = p[:, 1:] - a[:, 1]
+        dot = wx * d[:, 0]
+        dot += wy * d[:, 1]
+        ww = np.square(wx, out=wx)
+        ww += np.square(wy, out=wy)
+        q = np.clip(dot / dd, 0.0, 1.0)
+        ww -= 2 * q * dot
+        ww += np.square(q, out=q) * dd
+        i, k = np.nonzero(ww <= reach[start : start + chunk, None])
+        near_rows.append(i + start)
+        near_segments.append(k)
+    i, k = np.concatenate(near_rows), np.concatenate(near_segments)
+    slave = rows[i]
+    w = x[slave] - a[k]
+    dot = np.sum(w * d[k], axis=-1)
+    t = np.where(dot <= 0, 0.0, np.where(dot >= dd[k], 1.0, dot / dd[k]))
+    point = np.where((t == 1)[:, None], b[k], a[k] + t[:, None] * d[k])
+    e = x[slave] - point
+    dist = np.linalg.norm(e, axis=-1)
+    ok = np.ones(len(i), bool)
+    if slave_node is not None:
+        own = slave_node[slave]
+        ok &= (segments[k, 0] != own) & (segments[k, 1] != own)
+    if self_contact:
+        low, high, loop, node_chain, node_arc = arc_lengths(nodes, segments, topology)
+        s = node_arc[slave_node[slave]]
+        direct = np.maximum(np.maximum(low[k] - s, s - high[k]), 0.0)
+        around = np.where(s < low[k], s + (loop[k] - high[k]), (loop[k] - s) + low[k])
+        same = topology[0][k] == node_chain[slave_node[slave]]
+        ok &= ~(same & (np.minimum(direct, around) < REACH * radius[slave]))
+    elif slave_body is not None and body is not None:
+        ok &= body[k] != slave_body[slave]
+    i, k, e, t, dist = i[ok], k[ok], e[ok], t[ok], dist[ok]
+    order = np.lexsort((k, dist, i))  # per row: nearest first, then the lower index
+    first = order[np.r_[True, i[order][1:] != i[order][:-1]]] if len(order) else order
+    segment = np.full(len(rows), -1, np.int64)
+    distance = np.full(len(rows), np.inf)
+    gap = np.zeros(len(rows))
+    at, k, e, t = i[first], k[first], e[first], t[first]
+    segment[at], distance[at] = k, dist[first]
+    cross = e[:, 0] * d[k, 1] - e[:, 1] * d[k, 0]  # (x - p) x d: the sign of (x - p).n
+    inside = (t > 0) & (t < 1)
+    at_end = np.where(cross >= 0, 1.0, -1.0) * dist[first]
+    gap[at] = np.where(inside, cross / np.sqrt(dd[k]), at_end)
+    found = distance <= radius[rows]
+    return np.where(found, segment, -1), found, np.where(found, gap, 0.0), distance
+
+
+# -- checks ----------------------------------------------------------------------
+
+
+def dense(result, num_rows: int) -> Contact:
+    """The dense ``Contact`` of a result (a ``ContactList`` expanded, a state dropped)."""
+    result = result[0] if isinstance(result, tuple) and not isinstance(result, Contact) else result
+    return result if isinstance(result, Contact) else result.to_contact(num_rows)
+
+
+def against(contact: Contact, reference: Contact) -> str:
+    """Rows whose segment, found or vertex differ; the largest gap difference where found."""
+    segment = np.asarray(contact.segment) != np.asarray(reference.segment)
+    found = np.asarray(contact.found) != np.asarray(reference.found)
+    vertex = np.asarray(contact.vertex) != np.asarray(reference.vertex)
+    both = np.asarray(contact.found) & np.asarray(reference.found)
+    gaps = np.abs(np.asarray(contact.gap, np.float64) - np.asarray(reference.gap, np.float64))
+    worst = float(gaps[both].max()) if both.any() else 0.0
+    text = f"{int(np.sum(segment | found))} rows differ"
+    if vertex.any():
+        text += f", {int(vertex.sum())} vertices differ"
+    return text + f", max gap diff {worst:.1e}" + " (over 1e-5!)" * (worst > GAP_TOLERANCE)
+
+
+def against_brute(contact: Contact, rows, brute, radius, scale) -> tuple[str, np.ndarray]:
+    """``brute`` (segment, found, gap, distance on ``rows``) against ``contact``: words and
+    the rows that disagree. A slave whose distance lies within 8 float32 ulps of the
+    coordinates' magnitude ``scale`` of its radius may be found either way: counted apart."""
+    segment, found, gap, distance = brute
+    radius = np.broadcast_to(np.asarray(radius, np.float64), (np.asarray(contact.gap).shape[0],))
+    mine_segment = np.asarray(contact.segment)[rows]
+    mine_found = np.asarray(contact.found)[rows]
+    mine_gap = np.asarray(contact.gap, np.float64)[rows]
+    at_radius = np.abs(distance - radius[rows]) <= 8 * np.finfo(np.float32).eps * scale
+    found_differs = (mine_found != found) & ~at_radius
+    segment_differs = mine_found & found & (mine_segment != segment)
+    gap_differs = mine_found & found & (np.abs(mine_gap - gap) > GAP_TOLERANCE)
+    bad = found_differs | segment_differs | gap_differs
+    text = f"{int(bad.sum())} of {len(rows)} rows differ ({int(found.sum())} found)"
+    if (at_radius & (mine_found != found)).any():
+        text += f", {int((at_radius & (mine_found != found)).sum())} at the radius to rounding"
+    return text, np.asarray(rows)[bad]
+
+
+# -- the three parts ---------------------------------------------------------------
+
+
+def timed(calls, repeats, warmup):
+    timings = time_interleaved(calls, repeats=repeats, warmup=warmup)
+    results = {name: jax.block_until_ready(fn(*args)) for name, (fn, args) in calls.items()}
+    return timings, results
+
+
+def row(scene, name, timing, ratio, check, compile_s=None) -> dict:
+    return {
+        "scene": scene,
+        "method": name,
+        "timing": timing,
+        "ratio": ratio,
+        "check": check,
+        "compile": timing.compile_s if compile_s is None else compile_s,
+    }
+
+
+def self_contact_part(num_nodes: int, sample: int, repeats: int, warmup: int, rng, notes):
+    scene = curling_chip(num_nodes)
+    x, surface, radius = scene.x, scene.surface, scene.radius
+    n, m = x.shape[0], surface.segments.shape[0]
+    node = scene.slave_node
+    title = f"curling chip, {n:,} nodes, r = {radius:.3g}"
+    allocated, sizes = {}, {}
+
+    def allocate(search, **pairing):
+        start = time.perf_counter()
+        state = search.allocate(x, surface, **pairing)
+        allocated[search] = time.perf_counter() - start
+        sizes[search] = state.sizes
+        return state
+
+    searches = {
+        "Search(self_contact=True).closest": Search(radius=radius, self_contact=True),
+        "Search(self_contact=True, compact=True).closest": Search(
+            radius=radius, self_contact=True, compact=True
+        ),
+    }
+    calls = {}
+    for name, search in searches.items():
+        state = allocate(search, slave_node=node)
+
+        def step(state, x, surface, node, search=search):
+            return search.closest(state, x, surface, slave_node=node)
+
+        calls[name] = (jax.jit(step), (state, x, surface, node))
+    plain = Search(radius=radius)
+    calls["plain Search.closest (no pair rule)"] = (
+        jax.jit(plain.closest),
+        (allocate(plain), x, surface),
+    )
+    dense_reference = n * m <= DENSE_PAIRS
+    if dense_reference:
+
+        def exhaustive(x, surface, node):
+            return all_to_all(x, surface, radius=radius, slave_node=node, self_contact=True)
+
+        calls["all_to_all(self_contact=True)"] = (jax.jit(exhaustive), (x, surface, node))
+        calls["all_to_all (no pair rule)"] = (
+            jax.jit(lambda x, surface: all_to_all(x, surface, radius=radius)),
+            (x, surface),
+        )
+
+    # The NumPy brute force on a random sample, timed in the same rounds.
+    nodes64 = np.asarray(x, np.float64)
+    segments64 = np.asarray(surface.segments)
+    node64 = np.asarray(node)
+    topology = outline_arcs(nodes64, segments64)
+    rows = np.sort(rng.choice(n, size=min(sample, n), replace=False))
+
+    def numpy_sample(rows=rows):
+        return brute_force(
+            nodes64,
+            nodes64,
+            segments64,
+            rows,
+            radius,
+            slave_node=node64,
+            self_contact=True,
+            topology=topology,
+        )
+
+    calls[f"NumPy f64 brute force, {len(rows):,} sampled slaves"] = (numpy_sample, ())
+    timings, results = timed(calls, repeats, warmup)
+
+    names = list(calls)
+    contacts = {name: dense(results[name], n) for name in names[:3]}
+    self_dense = contacts[names[0]]
+    pressed = np.asarray(scene.pressed)
+    base = timings[names[2]].median_s
+    lines = []
+    for name in names[:2]:
+        contact = contacts[name]
+        active = np.asarray(contact.active)
+        check = (
+            f"active = pressed: {bool((active == pressed).all())} "
+            f"({int(active.sum())} of {int(pressed.sum())}); found {int(contact.found.sum())}"
+            f"; overflow {bool(contact.overflow)}"
+        )
+        if name != names[0]:
+            check += f"; against the dense form: {against(contact, self_dense)}"
+        lines.append(row(title, name, timings[name], timings[name].median_s / base, check))
+    plain_contact = contacts[names[2]]
+    lines.append(
+        row(
+            title,
+            names[2],
+            timings[names[2]],
+            1.0,
+            f"found {int(plain_contact.found.sum())} (own segments), "
+            f"active {int(plain_contact.active.sum())}",
+        )
+    )
+    if dense_reference:
+        name = names[3]
+        reference = results[name]
+        check = (
+            f"active = pressed: {bool((np.asarray(reference.active) == pressed).all())}; "
+            f"self-contact Search against it: {against(self_dense, reference)}; "
+            f"compact: {against(contacts[names[1]], reference)}"
+        )
+        lines.append(row(title, name, timings[name], timings[name].median_s / base, check))
+        name = names[4]
+        lines.append(
+            row(
+                title,
+                name,
+                timings[name],
+                timings[name].median_s / base,
+                f"found {int(results[name].found.sum())} (own segments); self-contact "
+                f"all_to_all / this = {timings[names[3]].median_s / timings[name].median_s:.1f}x",
+            )
+        )
+    else:
+        notes.append(
+            f"{title}: `all_to_all` not run ({n:,} x {m:,} = {n * m:.1e} pairs > "
+            f"{DENSE_PAIRS:.0e})."
+        )
+    # Check on the sample and on every row the search finds (the latter untimed).
+    name = names[-1]
+    found_rows = np.flatnonzero(np.asarray(self_dense.found))
+    checked = np.union1d(rows, found_rows)
+    brute = numpy_sample(checked)
+    scale = float(np.abs(nodes64).max())
+    words, bad = against_brute(self_dense, checked, brute, radius, scale)
+    compact_words, compact_bad = against_brute(contacts[names[1]], checked, brute, radius, scale)
+    per_slave = timings[name].median_s / len(rows)
+    extrapolated = per_slave * n
+    lines.append(
+        row(
+            title,
+            name,
+            timings[name],
+            timings[name].median_s / base,
+            f"time per slave {per_slave * 1e3:.3f} ms, extrapolated to all {n:,}: "
+            f"{extrapolated:.1f} s ({extrapolated / base:.0f}x plain); "
+            f"on the sample + the {len(found_rows)} found rows: dense {words}; "
+            f"compact {compact_words}",
+            compile_s=float("nan"),
+        )
+    )
+    for label, wrong in (("dense", bad), ("compact", compact_bad)):
+        if len(wrong):
+            notes.append(
+                f"{title}: {label} rows that differ from the brute force: "
+                f"{wrong[:20].tolist()} (reproduce: `curling_chip({num_nodes})`, "
+                "`brute_force` of benchmarks/bodies.py on those rows)."
+            )
+    ratio = timings[names[0]].median_s / base
+    compact_ratio = timings[names[1]].median_s / base
+    notes.append(
+        f"{title}: self-contact / plain = {ratio:.2f}x dense, {compact_ratio:.2f}x compact "
+        f"(target <= 2x). Allocation (host, untimed above): "
+        + ", ".join(
+            f"{'self-contact' if s.self_contact else 'plain'}"
+            f"{' compact' if s.compact else ''} {seconds:.1f} s"
+            for s, seconds in allocated.items()
+        )
+        + f". Sizes of the plain search: {cells(sizes[plain])} (cell edge "
+        f"{sizes[plain].cell_size / radius:.0f} r); the self-contact search's: "
+        f"{cells(sizes[searches[names[0]]])}."
+    )
+    return lines
+
+
+def cells(sizes):
+    if not sizes.use_cells:
+        return "no cells"
+    shape = "x".join(map(str, sizes.grid_shape))
+    return f"{shape} cells of {sizes.cell_size:.3g}, at most {sizes.cell_capacity} segments"
+
+
+def split(scene):
+    """Per body: (node slice, local segments, the union index of each local segment)."""
+    node_body = np.asarray(scene.slave_body)
+    segments = np.asarray(scene.surface.segments)
+    body = np.asarray(scene.body)
+    parts = []
+    for label in np.unique(node_body):
+        at = np.flatnonzero(node_body == label)
+        if not np.array_equal(at, np.arange(at[0], at[-1] + 1)):
+            raise ValueError("each body's nodes must be consecutive")
+        ids = np.flatnonzero(body == label)
+        parts.append((slice(int(at[0]), int(at[-1]) + 1), segments[ids] - at[0], ids))
+    return parts
+
+
+def bodies_part(n: int, repeats: int, warmup: int, notes):
+    scene = two_blocks(n, overlap=2.0 / n)
+    x, surface, radius = scene.x, scene.surface, scene.radius
+    count, m = x.shape[0], surface.segments.shape[0]
+    title = f"two blocks, {count:,} nodes, r = {radius:.3g}"
+    search = Search(radius=radius)
+    union_state = search.allocate(x, surface, slave_body=scene.slave_body)
+
+    def one_call(state, x, surface, slave_body):
+        return search.closest(state, x, surface, slave_body=slave_body)
+
+    (first, segments0, ids0), (second, segments1, ids1) = split(scene)
+    segments0, segments1 = jnp.asarray(segments0), jnp.asarray(segments1)
+    # Body 0's nodes against body 1's outline alone, and body 1's against body 0's.
+    states = (
+        search.allocate(x[first], Surface(x[second], segments1)),
+        search.allocate(x[second], Surface(x[first], segments0)),
+    )
+
+    def two_searches(states, x, segments0, segments1):
+        c0, s0 = search.closest(states[0], x[first], Surface(x[second], segments1))
+        c1, s1 = search.closest(states[1], x[second], Surface(x[first], segments0))
+        return (c0, c1), (s0, s1)
+
+    def exhaustive(x, surface, slave_body):
+        return all_to_all(x, surface, radius=radius, slave_body=slave_body)
+
+    calls = {
+        "one Search.closest over the union (slave_body)": (
+            jax.jit(one_call),
+            (union_state, x, surface, scene.slave_body),
+        ),
+        "two Search.closest, each body against the other's outline": (
+            jax.jit(two_searches),
+            (states, x, segments0, segments1),
+        ),
+    }
+    if count * m <= DENSE_PAIRS:
+        calls["all_to_all with the labels"] = (
+            jax.jit(exhaustive),
+            (x, surface, scene.slave_body),
+        )
+    timings, results = timed(calls, repeats, warmup)
+    names = list(calls)
+    union = dense(results[names[0]], count)
+    (c0, c1), _ = results[names[1]]
+    # The two answers in the union's numbering: rows in order, segments mapped.
+    ids = (jnp.asarray(ids1), jnp.asarray(ids0))  # body 0's rows met body 1's segments
+    pieces = [
+        c._replace(
+            segment=jnp.where(c.segment >= 0, mapping[jnp.maximum(c.segment, 0)], -1),
+            vertex=jnp.where(c.vertex >= 0, c.vertex + offset, -1),
+        )
+        for c, mapping, offset in ((c0, ids[0], second.start), (c1, ids[1], first.start))
+    ]
+    pair = Contact(
+        *(jnp.concatenate([a, b]) for a, b in zip(pieces[0][:-1], pieces[1][:-1], strict=True)),
+        pieces[0].overflow | pieces[1].overflow,
+    )
+    pressed = np.asarray(scene.pressed)
+    base = timings[names[1]].median_s
+    out = []
+    for name, contact in ((names[0], union), (names[1], pair)):
+        active = np.asarray(contact.active)
+        check = (
+            f"active = pressed: {bool((active == pressed).all())} ({int(active.sum())} of "
+            f"{int(pressed.sum())}); found {int(contact.found.sum())}; "
+            f"overflow {bool(contact.overflow)}"
+        )
+        if name == names[0]:
+            check += f"; against the two searches: {against(union, pair)}"
+        out.append(row(title, name, timings[name], timings[name].median_s / base, check))
+    if len(names) > 2:
+        reference = results[names[2]]
+        out.append(
+            row(
+                title,
+                names[2],
+                timings[names[2]],
+                timings[names[2]].median_s / base,
+                f"one call against it: {against(union, reference)}; two searches: "
+                f"{against(pair, reference)}",
+            )
+        )
+
+    blocks = -(-count // union_state.sizes.block_size)
+    notes.append(
+        f"{title}: one call / two searches = {timings[names[0]].median_s / base:.2f}x. "
+        f"Blocks of {union_state.sizes.block_size} rows kept: one call "
+        f"{union_state.sizes.block_capacity} of {blocks} (every node lies on its own outline, "
+        "so the broad phase keeps every block and the pair rule is left to the narrow phase), "
+        f"two searches {states[0].sizes.block_capacity} + {states[1].sizes.block_capacity}. "
+        f"Cells: one call {cells(union_state.sizes)}; two searches {cells(states[0].sizes)} "
+        f"and {cells(states[1].sizes)}: each search's grid spans only its kept slaves (a thin "
+        "band along the contact), and the other body's segments outside it are clamped into "
+        "the edge cells (`_cells.cell_of`), so the slaves near the corners search those cells."
+    )
+    return out
+
+
+def radius_part(num_nodes: int, repeats: int, warmup: int, rng, notes):
+    scene = cutting_scene(num_nodes, 18.0)
+    x, surface = scene.x, scene.surface
+    count = x.shape[0]
+    title = f"cutting scene, {count:,} nodes, R = 0.1"
+    search = Search(radius=0.1)
+    state = search.allocate(x, surface)
+    traces = {"f[N]": 0, "scalar": 0}
+
+    def per_slave(state, x, surface, r):
+        traces["f[N]"] += 1
+        return search.closest(state, x, surface, radius=r)
+
+    def scalar(state, x, surface, r):
+        traces["scalar"] += 1
+        return search.closest(state, x, surface, radius=r)
+
+    def exhaustive(x, surface, r):
+        return all_to_all(x, surface, radius=r)
+
+    def draw():
+        return jnp.asarray(rng.uniform(0.05, 0.1, count), x.dtype)
+
+    r = draw()
+    tenth = jnp.asarray(0.1, x.dtype)
+    per_slave_jit, scalar_jit = jax.jit(per_slave), jax.jit(scalar)
+    calls = {
+        "Search(radius=0.1).closest(radius=r), r f[N] in [0.05, 0.1]": (
+            per_slave_jit,
+            (state, x, surface, r),
+        ),
+        "Search(radius=0.1).closest(radius=0.1), traced scalar": (
+            scalar_jit,
+            (state, x, surface, tenth),
+        ),
+        "all_to_all(radius=r), r f[N]": (jax.jit(exhaustive), (x, surface, r)),
+    }
+    timings, results = timed(calls, repeats, warmup)
+    names = list(calls)
+    base = timings[names[1]].median_s
+    reference = results[names[2]]
+    scalar_reference = all_to_all(x, surface, radius=0.1)
+    by_rank = dense(results[names[0]], count)
+    at_tenth = dense(results[names[1]], count)
+    # New radii: the same jitted functions, called (not lowered) with fresh values.
+    before = dict(traces)
+    for _ in range(4):
+        jax.block_until_ready(per_slave_jit(state, x, surface, draw()))
+        jax.block_until_ready(
+            scalar_jit(state, x, surface, jnp.asarray(rng.uniform(0.05, 0.1), x.dtype))
+        )
+    after = {key: traces[key] - before[key] for key in traces}
+    out = [
+        row(
+            title,
+            names[0],
+            timings[names[0]],
+            timings[names[0]].median_s / base,
+            f"against all_to_all(r): {against(by_rank, reference)}; found "
+            f"{int(by_rank.found.sum())}; overflow {bool(by_rank.overflow)}",
+        ),
+        row(
+            title,
+            names[1],
+            timings[names[1]],
+            1.0,
+            f"against all_to_all(0.1): {against(at_tenth, scalar_reference)}; found "
+            f"{int(at_tenth.found.sum())}; overflow {bool(at_tenth.overflow)}",
+        ),
+        row(
+            title,
+            names[2],
+            timings[names[2]],
+            timings[names[2]].median_s / base,
+            f"found {int(reference.found.sum())}",
+        ),
+    ]
+    notes.append(
+        f"{title}: after the compile (1 trace each), 4 calls with new f[N] radii traced "
+        f"{after['f[N]']} more times and 4 with new scalar radii {after['scalar']}: "
+        f"{'a new radius compiles nothing' if not any(after.values()) else 'RETRACED'}."
+    )
+    return out
+
+
+def table(rows) -> list[str]:
+    lines = [
+        "| scene | method | median ms | p10-p90 ms | vs. first of part | compile s | check |",
+        "|---|---|---:|---:|---:|---:|---|",
+    ]
+    for entry in rows:
+        t = entry["timing"]
+        compile_s = "-" if np.isnan(entry["compile"]) else f"{entry['compile']:.2f}"
+        lines.append(
+            f"| {entry['scene']} | {entry['method']} | {t.median_s * 1e3:.2f} "
+            f"| {t.p10_s * 1e3:.2f}-{t.p90_s * 1e3:.2f} | {entry['ratio']:.2f}x "
+            f"| {compile_s} | {entry['check']} |"
+        )
+    return lines
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="small sizes, a smoke test")
+    parser.add_argument("--repeats", type=int, default=None, help="timed rounds (20; quick 10)")
+    parser.add_argument("--warmup", type=int, default=2, help="untimed runs of each first")
+    parser.add_argument("--seed", type=int, default=0, help="the sample and the radii")
+    args = parser.parse_args(argv)
+    repeats = args.repeats or (10 if args.quick else 20)
+    rng = np.random.default_rng(args.seed)
+    chips = (2_000, 10_000) if args.quick else (10_000, 100_000)
+    blocks = 100 if args.quick else 1_250
+    cutting = 10_000 if args.quick else 81_939
+    sample = 500 if args.quick else 2_000
+
+    start = time.perf_counter()
+    notes, rows = [], []
+    for num_nodes in chips:
+        rows += self_contact_part(num_nodes, sample, repeats, args.warmup, rng, notes)
+    rows += bodies_part(blocks, repeats, args.warmup, notes)
+    rows += radius_part(cutting, repeats, args.warmup, rng, notes)
+
+    command = "python benchmarks/bodies.py" + " --quick" * args.quick
+    if args.repeats:
+        command += f" --repeats {args.repeats}"
+    lines = [
+        "## Bodies, self-contact and a radius per slave",
+        "",
+        f"`{command}`; {machine()}; float32; median of {repeats} interleaved rounds per part "
+        f"after {args.warmup} warm-up runs, compile apart. `vs.`: the median over that of the "
+        "part's comparator (plain `Search.closest`; the two searches; the scalar radius).",
+        "",
+        *table(rows),
+        "",
+        *[f"- {note}" for note in notes],
+        "- NumPy brute force: float64, every slave of the sample against every segment "
+        "(squared distances in chunks of 64 slaves), the pairs within 1.01 r measured exactly "
+        "and put to the rule as docs/contract.md states it; its time per slave is "
+        "extrapolated linearly to N (the chain walk, topology only, is done once outside the "
+        f"timer). Sample drawn with seed {args.seed}. A row whose brute-force distance lies "
+        "within 8 float32 ulps of the coordinates' magnitude of the radius may be found either "
+        "way and is not counted as differing.",
+        f"- Whole run {time.perf_counter() - start:.0f} s.",
+    ]
+    print("\n".join(lines))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
