@@ -135,11 +135,11 @@ def expired(candidates: Candidates, x, surface: Surface, mask, skin) -> Array:
     new_rows = jnp.any(row_ok & ~candidates.row_ok)
     new_segments = jnp.any(segments.ok & ~candidates.segment_ok)
     rejoined = jnp.any(segments.ok & jnp.any(segments.indices != candidates.indices, axis=-1))
-    reasons = (moved > skin, new_rows, new_segments, rejoined)
-    bits = (MOVED, NEW_ROWS, NEW_SEGMENTS, REJOINED)
-    return sum(jnp.where(flag, bit, 0) for flag, bit in zip(reasons, bits, strict=True)).astype(
-        jnp.int32
-    )
+    reasons = ((moved > skin, MOVED), (new_rows, NEW_ROWS), (new_segments, NEW_SEGMENTS))
+    bits = jnp.where(rejoined, REJOINED, 0)
+    for flag, bit in reasons:
+        bits = bits | jnp.where(flag, bit, 0)
+    return bits.astype(jnp.int32)
 
 
 class _How(NamedTuple):

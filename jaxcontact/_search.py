@@ -287,6 +287,8 @@ class Search:
         surface = _batched_surface(surface, batch)
         pool = _batched("pool", pool, 1, batch)
         pairing = Pairing(slave_node, slave_body, self.self_contact)
+        first = jax.tree.map(lambda values: values[0], (x, surface, mask, pairing))
+        self._pairing(first[0], first[1], first[2], first[3].slave_node, first[3].slave_body)
         axes = (0, 0, None if mask is None else 0, jax.tree.map(lambda _: 0, pairing))
         sizes = path_sizes = candidates = None
         overflow = jnp.zeros(x.shape[:1], bool)
