@@ -250,7 +250,7 @@ def test_pair_keywords_under_vmap_and_lax_scan_in_a_search():
     x, surface, slave_node, slave_body = two_rings()
     keywords = {"slave_node": slave_node, "slave_body": slave_body}
     shifts = jnp.asarray(np.linspace(0.0, 0.1, 4), x.dtype)
-    moving = jnp.asarray(slave_body == 1)[:, None] * jnp.array([-1.0, 0.0], x.dtype)
+    moving = jnp.stack([-jnp.asarray(slave_body == 1, x.dtype), jnp.zeros(x.shape[0], x.dtype)], -1)
 
     def at(shift):
         return x + shift * moving
@@ -319,63 +319,78 @@ def test_self_contact_needs_slave_node_and_bad_pair_inputs_are_named():
     assert jaxcontact.__version__ == "0.3.0"
 
 
-SELF_CONTACT = {
-    "all_to_all": lambda scene: all_to_all(
-        scene.x, scene.surface, radius=scene.radius, slave_node=scene.slave_node,
-        self_contact=True,
-    ),
-    "bucket_sort binned": lambda scene: bucket_sort(
-        scene.x, scene.surface, radius=scene.radius, slave_node=scene.slave_node,
-        self_contact=True,
-    ),
-    "Search compact": lambda scene: _search_self(scene),
-}  # fmt: skip
+def three_outlines():
+    """The corner outline, the folded U and a curling chip side by side, one
+    surface (three chains), each slave with its own scene's radius: one
+    program per detector for all three.
+
+    Returns ``(x, surface, slave_node, radius, pressed, depth, rows)`` with
+    ``rows`` the slice of each scene."""
+    from jaxcontact.scenes import corner_outline, curling_chip, folded_u
+
+    scenes = [corner_outline(dtype=FLOAT), folded_u(dtype=FLOAT), curling_chip(2_000, dtype=FLOAT)]
+    nodes, segments, radius, pressed, depth, rows, first = [], [], [], [], [], [], 0
+    for shift, scene in zip((0.0, 20.0, 40.0), scenes, strict=True):
+        count = scene.x.shape[0]
+        nodes.append(np.asarray(scene.x, np.float64) + [shift, 0.0])
+        segments.append(np.asarray(scene.surface.segments) + first)
+        radius.append(np.full(count, scene.radius))
+        pressed.append(np.asarray(scene.pressed))
+        depth.append(np.asarray(scene.depth, np.float64))
+        rows.append(slice(first, first + count))
+        first += count
+    x = jnp.asarray(np.concatenate(nodes), FLOAT)
+    surface = Surface(x, jnp.asarray(np.concatenate(segments)))
+    slave_node = np.arange(first, dtype=np.int32)
+    radius = jnp.asarray(np.concatenate(radius), FLOAT)
+    return x, surface, slave_node, radius, np.concatenate(pressed), np.concatenate(depth), rows
 
 
-def _search_self(scene):
-    search = Search(radius=scene.radius, skin=0.5 * scene.radius, self_contact=True, compact=True)
-    state = search.allocate(scene.x, scene.surface, slave_node=scene.slave_node)
-    step = jax.jit(
-        lambda state, x: search.closest(state, x, scene.surface, slave_node=scene.slave_node)
-    )
-    entries, state = step(state, scene.x)
+def _search_self(x, surface, slave_node, radius):
+    bound = float(jnp.max(radius))
+    search = Search(radius=bound, skin=0.25 * bound, self_contact=True, compact=True)
+    state = search.allocate(x, surface, slave_node=slave_node)
+    entries, state = jax.jit(
+        lambda state, x, r: search.closest(state, x, surface, radius=r, slave_node=slave_node)
+    )(state, x, radius)
     assert not bool(state.overflow)
-    return entries.to_contact(scene.x.shape[0])
+    return entries.to_contact(x.shape[0])
+
+
+SELF_CONTACT = {
+    "all_to_all": lambda *scene: all_to_all(
+        scene[0], scene[1], radius=scene[3], slave_node=scene[2], self_contact=True
+    ),
+    "bucket_sort binned": lambda *scene: bucket_sort(
+        scene[0], scene[1], radius=scene[3], slave_node=scene[2], self_contact=True
+    ),
+    "Search compact": _search_self,
+}
 
 
 @pytest.mark.parametrize("detector", SELF_CONTACT)
 def test_self_contact_reports_exactly_the_pressed_nodes_and_nothing_at_corners(detector):
-    from jaxcontact.scenes import corner_outline, curling_chip, folded_u
-
-    detect = SELF_CONTACT[detector]
+    x, surface, slave_node, radius, pressed, depth, (corners, fold, chip) = three_outlines()
+    contact = SELF_CONTACT[detector](x, surface, slave_node, radius)
+    active = np.asarray(contact.active)
     # Convex and concave corners of 90 and 40 degrees, fine and coarse: nothing.
-    corners = corner_outline(dtype=FLOAT)
-    contact = detect(corners)
-    assert int(contact.active.sum()) == 0
-    # Without the neighbourhood rule the corners report false contact.
-    plain = all_to_all(
-        corners.x, corners.surface, radius=corners.radius, slave_node=corners.slave_node
-    )
-    assert int(plain.active.sum()) > 0
-    # A folded U pressed into itself: exactly the pressed nodes, at their depth,
-    # against the other arm.
-    fold = folded_u(dtype=FLOAT)
-    contact = detect(fold)
-    pressed = np.asarray(fold.pressed)
-    np.testing.assert_array_equal(np.asarray(contact.active), pressed)
-    depth = np.asarray(fold.depth)
+    assert not active[corners].any()
+    # A folded U pressed into itself: exactly the pressed nodes, at their depth;
+    # and a chip curling onto the machined surface, caught.
+    np.testing.assert_array_equal(active, pressed)
+    assert pressed[fold].sum() > 0 and pressed[chip].sum() > 0
     exact = pressed & np.isfinite(depth)
-    np.testing.assert_allclose(
-        -np.asarray(contact.gap)[exact], depth[exact], atol=local_atol(FLOAT, 8.0)
-    )
-    # Against the other arm: its face's normal opposes the slave's own face's.
-    nodes, segments = np.asarray(fold.surface.nodes), np.asarray(fold.surface.segments)
+    gap = np.asarray(contact.gap)
+    np.testing.assert_allclose(-gap[exact], depth[exact], atol=local_atol(FLOAT, 8.0))
+    # The U's arms meet the other arm: its face's normal opposes their own face's.
+    nodes, segments = np.asarray(surface.nodes), np.asarray(surface.segments)
     starting = np.full(len(nodes), -1)
     starting[segments[:, 0]] = np.arange(len(segments))
     own = nodes[segments[starting, 1]] - nodes[segments[starting, 0]]
     own_normal = np.stack([own[:, 1], -own[:, 0]], -1)
-    assert np.all(np.sum(np.asarray(contact.normal) * own_normal, axis=-1)[pressed] < 0)
-    # A chip curling onto the machined surface is caught.
-    chip = curling_chip(2_000, dtype=FLOAT)
-    contact = detect(chip)
-    np.testing.assert_array_equal(np.asarray(contact.active), np.asarray(chip.pressed))
+    facing = np.sum(np.asarray(contact.normal) * own_normal, axis=-1)
+    assert np.all(facing[fold][pressed[fold]] < 0)
+    if detector == "all_to_all":
+        # Without the neighbourhood rule the corners report false contact.
+        plain = all_to_all(x, surface, radius=radius, slave_node=slave_node)
+        assert np.asarray(plain.active)[corners].sum() > 0

@@ -34,7 +34,7 @@ def test_segments_of_the_pool_switch_on_without_overflow_or_rebuild():
     mask[outside] = False
     scene, surface = die(mask)
     for with_pool in (True, False):
-        search = Search(radius=scene.radius, skin=0.02, method="binned", compact=True)
+        search = Search(radius=scene.radius, skin=0.02, method="binned")
         state = search.allocate(scene.x, surface, pool=pool if with_pool else None)
         step = jax.jit(search.closest)
         for stop in range(44, 64, 4):
@@ -42,7 +42,7 @@ def test_segments_of_the_pool_switch_on_without_overflow_or_rebuild():
             contact, state = step(state, scene.x, surface._replace(mask=jnp.asarray(now)))
             if with_pool:
                 expected = all_to_all(scene.x, surface._replace(mask=jnp.asarray(now)), radius=0.02)
-                assert_same_contact(contact.to_contact(len(scene.x)), expected, 0.02)
+                assert_same_contact(contact, expected, 0.02)
         if with_pool:
             assert int(state.rebuilds) == 0 and not bool(state.overflow)
             assert state.rebuild_reasons() == []
@@ -68,12 +68,11 @@ def trajectory(steps=12):
 
 def test_resumable_scan_repeats_only_the_chunks_that_overflowed():
     x, nodes, segments = trajectory()
-    search = Search(radius=0.1, skin=0.05, compact=True, slack=1.0)
-    num_rows = x.shape[0]
+    search = Search(radius=0.1, skin=0.05, slack=1.0)
 
     def step(state, tool):
         contact, state = search.closest(state, x, Surface(tool, segments))
-        return state, contact.to_contact(num_rows).segment
+        return state, contact.segment
 
     def grow(state, tools):
         for tool in tools:  # sized for every configuration the chunk reaches
