@@ -145,7 +145,7 @@ def expired(candidates: Candidates, x, surface: Surface, mask, skin) -> Array:
 class _How(NamedTuple):
     """How one detector searches its kept slaves: static, closed over."""
 
-    kernel: Callable  # kernel(*row, segment: Edge) -> f[]: a pair's score
+    kernel: Callable  # kernel(*row, row_tags, (Edge, segment tags)) -> f[]: _pairs.ruled
     sizes: Sizes
     assemble: Callable  # assemble(choice, overflow) -> Contact | Crossing of the kept slaves
     empty: Callable  # empty(rows, overflow) -> the not-found result

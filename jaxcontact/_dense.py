@@ -78,7 +78,7 @@ def all_to_all(
 
 
 def _search_all(kernel, rows, segments: Segments, slave_ok, assemble):
-    """``assemble(choice)`` for the segment of lowest ``kernel(*row, segment)``
+    """``assemble(choice)`` for the segment of lowest ``kernel(*row, row_tags, segment)``
     per row, over every segment (``kernel`` from ``_pairs.ruled``, the
     rows' tags last in ``rows``).
 
@@ -115,21 +115,21 @@ def _lowest(kernel, rows, segments: Segments, slave_ok):
 ROW_MULTIPLE = 8
 
 
-def _whole_vectors(rows: tuple, mask):
-    """``rows`` (each f[N, 2]) and ``mask``, padded with masked rows to a
+def _whole_vectors(rows: tuple, mask, per_row=None):
+    """``rows`` (each f[N, 2]), ``mask`` and ``per_row`` (a pytree of other
+    per-row arrays: the pair keywords), padded with masked rows (zeros) to a
     multiple of ``ROW_MULTIPLE``."""
     extra = -rows[0].shape[0] % ROW_MULTIPLE
     if extra == 0:
-        return rows, mask
+        return rows, mask, per_row
     ok = jnp.ones(rows[0].shape[0], bool) if mask is None else mask
-    padded = tuple(jnp.pad(r, ((0, extra), (0, 0))) for r in rows), jnp.pad(ok, (0, extra))
+
+    def pad(values):
+        return jnp.pad(values, ((0, extra),) + ((0, 0),) * (values.ndim - 1))
+
+    padded = tuple(map(pad, rows)), pad(ok), jax.tree.map(pad, per_row)
     # Written out once: a pad fused into the search's loops would keep the odd count.
     return jax.lax.optimization_barrier(padded)
-
-
-def _whole_vectors_of(per_row, num_rows: int):
-    """Per-row arrays (a pytree) padded with zeros to ``num_rows`` (``_whole_vectors``)."""
-    return jax.tree.map(lambda values: jnp.pad(values, (0, num_rows - values.shape[0])), per_row)
 
 
 def _first_rows(result, num_rows: int):
@@ -207,8 +207,7 @@ def path_lengths(x_prev: Array, x: Array) -> Array:
 @searched_whole(rows="x")
 def _swept(x_prev, x, surface, mask, pairing: Pairing = NO_PAIRING):
     num_rows = x.shape[0]
-    (x_prev, x), mask = _whole_vectors((x_prev, x), mask)
-    pairing = _whole_vectors_of(pairing, x.shape[0])
+    (x_prev, x), mask, pairing = _whole_vectors((x_prev, x), mask, pairing)
     x_prev, x, slave_ok = _inputs.sanitize_paths(x_prev, x, mask)
     segments = _inputs.resolve_segments(surface)
     rule, tags, segments = tag(pairing, segments, surface.body, path_lengths(x_prev, x))

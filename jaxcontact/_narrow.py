@@ -85,7 +85,8 @@ def search_listed(kernel, rows, segments: Segments, listed: CellLists, sizes: Si
     """``(i32[S], f[S])``: each kept slave against the segments of its cell, at
     most ``sizes.cell_capacity`` slots; the choice and its score.
 
-    ``kernel(*row, segment)`` scores a pair; ``rows`` are the kept slaves' f[S, ...]
+    ``kernel(*row, row_tags, segment)`` scores a pair (``_pairs.ruled``);
+    ``rows`` are the kept slaves' f[S, ...]
     arrays. A row costs as many slots as the fullest list it is searched
     with. Kept blocks hold many slaves whose cells are empty (a block is kept
     when one of its rows meets the master's box), so above
@@ -144,7 +145,7 @@ def choose(queries: Queries, segments: Segments, boxes: Box, kernel, sizes: Size
     """``((i32[S], f[S]), bool[])``: the chosen segment of each kept slave and
     its score, and whether the cells overflowed.
 
-    Pairs are scored by ``kernel(*row, segment)`` over ``queries.rows``. Rows
+    Pairs are scored by ``kernel(*row, row_tags, segment)`` over ``queries.rows``. Rows
     that are not ``ok`` may hold any choice; the caller masks them.
     ``listed`` reuses candidate lists found before (``Search``).
     """
@@ -159,7 +160,7 @@ def choose(queries: Queries, segments: Segments, boxes: Box, kernel, sizes: Size
 
 
 def vmapped(kernel, *rows):
-    """``pair_value(segment)`` mapping ``kernel(*row, segment)`` over rows.
+    """``pair_value(segment)`` mapping ``kernel(*rows, segment)`` over rows.
 
     ``segment`` is ``(Edge, segment tags)``: of one segment for all rows
     (f[2] ends) or one per row (f[S, 2] ends). Kernels come from
