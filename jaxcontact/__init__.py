@@ -7,13 +7,15 @@ from jaxcontact._dense import swept as swept
 from jaxcontact._resume import resumable_scan as resumable_scan
 from jaxcontact._search import Search as Search
 from jaxcontact._search import SearchState as SearchState
-from jaxcontact._shard import contact_forces as contact_forces
 from jaxcontact._shard import sharded as sharded
 from jaxcontact._sizes import Sizes as Sizes
+from jaxcontact._track import Slip as Slip
+from jaxcontact._track import track as track
 from jaxcontact._types import Contact as Contact
 from jaxcontact._types import ContactList as ContactList
 from jaxcontact._types import Crossing as Crossing
 from jaxcontact._types import Surface as Surface
 from jaxcontact._validate import validate as validate
+from jaxcontact.forces import contact_forces as contact_forces
 
-__version__ = "0.3.0"
+__version__ = "0.4.0"

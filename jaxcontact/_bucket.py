@@ -33,11 +33,12 @@ from jaxcontact import _inputs
 from jaxcontact._assemble import contact_from_choice, crossing_from_choice
 from jaxcontact._broad import Blocks, broad_phase, conservative_margin, kept_rows, segment_boxes
 from jaxcontact._cells import CellLists, list_candidates
-from jaxcontact._dense import path_lengths
+from jaxcontact._dense import path_lengths, with_normals
 from jaxcontact._geometry import first_hit_time, squared_distance
 from jaxcontact._inputs import Segments, reach_of
 from jaxcontact._lowest import one_scene_at_a_time
 from jaxcontact._narrow import Queries, choose, in_stages
+from jaxcontact._normals import CORNER_DEGREES, check_normals
 from jaxcontact._padded import cut_entries, cut_rows, pad_contact_scene, pad_scene
 from jaxcontact._pairs import NO_PAIRING, Pairing, pick, ruled, tag
 from jaxcontact._placement import searched_whole
@@ -469,6 +470,8 @@ def bucket_sort(
     slave_node: Array | None = None,
     slave_body: Array | None = None,
     self_contact: bool = False,
+    normals: str = "flat",
+    corner: float = CORNER_DEGREES,
 ) -> Contact | ContactList:
     """Closest master segment of every slave near the master, by bucket sort.
 
@@ -488,6 +491,7 @@ def bucket_sort(
         measures a tighter capacity once and reuses it).
       slave_node, slave_body, self_contact: the pair rule, as for
         ``all_to_all``.
+      normals, corner: flat or smooth normals, as for ``all_to_all``.
 
     Returns:
       A ``Contact`` equal to ``all_to_all``'s (its sizes are measured for
@@ -505,6 +509,7 @@ def bucket_sort(
     """
     x, surface, radius, mask = _inputs.check_contact_inputs(x, surface, radius, mask)
     pairing = _inputs.check_pairing(slave_node, slave_body, self_contact, x, surface, mask)
+    corner = check_normals(normals, corner)
     require_concrete("bucket_sort", (x, surface, radius, mask, pairing))
     use_cells = surface.segments.shape[0] > CELLS_ABOVE
     x, mask, surface, radius, pairing, num_rows = pad_contact_scene(
@@ -514,6 +519,7 @@ def bucket_sort(
     if compact:
         sizes = room_for_every_slot(sizes)
     found = contact_jit(x, surface, radius, mask, sizes=sizes, pairing=pairing)
+    found = with_normals(found, x, surface, normals, corner)
     return cut_entries(found, num_rows) if compact else cut_rows(found, num_rows)
 
 

@@ -18,6 +18,7 @@ from jaxcontact._geometry import first_hit_time, squared_distance
 from jaxcontact._inputs import Segments
 from jaxcontact._lowest import one_scene_at_a_time
 from jaxcontact._narrow import in_stages, search_all, vmapped
+from jaxcontact._normals import CORNER_DEGREES, check_normals, smoothed_jit
 from jaxcontact._padded import cut_rows, pad_contact_scene, pad_scene
 from jaxcontact._pairs import NO_PAIRING, Pairing, ruled, tag
 from jaxcontact._placement import searched_whole
@@ -33,6 +34,8 @@ def all_to_all(
     slave_node: Array | None = None,
     slave_body: Array | None = None,
     self_contact: bool = False,
+    normals: str = "flat",
+    corner: float = CORNER_DEGREES,
 ) -> Contact:
     """Closest master segment of every slave, by dense N x M projection.
 
@@ -51,6 +54,12 @@ def all_to_all(
         those in its neighbourhood along the outline (docs/contract.md,
         "Bodies and self-contact"). Needs ``slave_node``; with no body
         labels the whole surface is one body.
+      normals: ``"flat"`` (each segment's own normal) or ``"smooth"``: a
+        normal interpolated along each segment between nodal normals, the
+        bisectors at nodes where the outline turns by less than ``corner``
+        degrees, and the gap measured along it (docs/contract.md, "Smooth
+        normals"). The segment, ``xi`` and point are the same either way.
+      corner: the corner angle of smooth normals, in degrees.
 
     Returns:
       A ``Contact`` with one row per slave, in ``x``'s dtype. ``overflow`` is
@@ -74,7 +83,14 @@ def all_to_all(
     x, mask, surface, radius, pairing, num_rows = pad_contact_scene(
         x, mask, surface, radius, pairing
     )
-    return cut_rows(_all_to_all(x, surface, radius, mask, pairing), num_rows)
+    corner = check_normals(normals, corner)
+    contact = _all_to_all(x, surface, radius, mask, pairing)
+    return cut_rows(with_normals(contact, x, surface, normals, corner), num_rows)
+
+
+def with_normals(result, x, surface, normals: str, corner: float):
+    """``result`` with the normals asked for; a no-op for flat normals."""
+    return result if normals == "flat" else smoothed_jit(result, x, surface, corner)
 
 
 def _search_all(kernel, rows, segments: Segments, slave_ok, assemble):

@@ -21,18 +21,23 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxcontact import _bucket, _dense, _inputs
+from jaxcontact import _bucket, _dense, _inputs, _normals, _track
 from jaxcontact._pairs import Pairing
 from jaxcontact._placement import replicated, searched_whole
 from jaxcontact._sizes import CELLS_ABOVE, CHUNK_ROWS, Sizes, largest, measure, measure_batch
+from jaxcontact._track import Slip
 from jaxcontact._types import Array, Contact, ContactList, Crossing, Surface
 
 METHODS = ("auto", "binned", "dense", "exhaustive")
+# What ``closest`` returns: the slip too with ``track=True``.
+Closest = (
+    tuple[Contact | ContactList, "SearchState"] | tuple[Contact | ContactList, "SearchState", Slip]
+)
 
 
 @functools.partial(
     jax.tree_util.register_dataclass,
-    data_fields=["candidates", "overflow", "rebuilds", "last_rebuild"],
+    data_fields=["candidates", "overflow", "rebuilds", "last_rebuild", "history"],
     meta_fields=["sizes", "path_sizes", "reach"],
 )
 @dataclasses.dataclass(frozen=True)
@@ -62,6 +67,8 @@ class SearchState:
         0 before the first rebuild.
       reach: ``radius + skin`` of the search that allocated it (static):
         a search that reaches farther refuses the state.
+      history: last step's contact of every slave (dense, N rows, for the
+        compact form too) for ``Search(track=True)``; ``None`` otherwise.
     """
 
     sizes: Sizes | None
@@ -71,6 +78,18 @@ class SearchState:
     rebuilds: Array
     last_rebuild: Array
     reach: float | None = None
+    history: _track.History | None = None
+
+    def forget(self, rows) -> SearchState:
+        """This state with the slip history of ``rows`` (bool[N]) forgotten.
+
+        After a remesh, a node renumbering or a body taken out of contact by
+        hand: the next step treats those slaves as touching for the first
+        time (``persisted`` False, zero slip). Runs under ``jit``.
+        """
+        if self.history is None:
+            raise ValueError("state has no slip history: allocate it with Search(track=True)")
+        return dataclasses.replace(self, history=_track.forget(self.history, rows))
 
     def rebuild_reasons(self) -> list[str]:
         """Why the candidates were last found again, in words (host side; [] if never)."""
@@ -145,6 +164,14 @@ class Search:
       self_contact: slaves also pair with their own body's segments outside
         their neighbourhood along the outline (``all_to_all``'s
         ``self_contact``); the calls then need ``slave_node=``.
+      track: carry each slave's contact from step to step in the state;
+        ``closest`` then returns ``(contact, state, slip)`` with the
+        ``Slip`` since the last step (docs/contract.md, "Slip history").
+      normals: ``"flat"``, each segment's own normal, or ``"smooth"``:
+        normals interpolated along each segment between nodal normals,
+        continuous across a vertex where the outline turns by less than
+        ``corner`` degrees (``all_to_all``'s ``normals``).
+      corner: the corner angle of smooth normals, in degrees.
 
     A radius per slave: ``radius`` is the static bound the sizes are built
     for; ``closest(..., radius=r)`` takes a traced scalar or f[N] at or
@@ -161,6 +188,9 @@ class Search:
     chunk_rows: int = CHUNK_ROWS
     compact: bool = False
     self_contact: bool = False
+    track: bool = False
+    normals: str = "flat"
+    corner: float = _normals.CORNER_DEGREES
 
     def __post_init__(self):
         # Plain Python numbers: the search is hashed as a static argument.
@@ -188,7 +218,8 @@ class Search:
                 raise ValueError(f"{name} must be an int >= 1; got {getattr(self, name)!r}")
         if self.cells_above < 0:
             raise ValueError(f"cells_above must be an int >= 0; got {self.cells_above}")
-        for name in ("compact", "self_contact"):
+        object.__setattr__(self, "corner", _normals.check_normals(self.normals, self.corner))
+        for name in ("compact", "self_contact", "track"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"{name} must be a bool; got {getattr(self, name)!r}")
         if self.compact and self.method == "exhaustive":
@@ -261,7 +292,7 @@ class Search:
             if x_prev is not None:
                 path_sizes = measure(x, pooled, x_prev=x_prev, mask=mask, **self._sizing)
                 path_sizes = self._merged(path_sizes, at_least, "path_sizes")
-        return self._state(sizes, path_sizes, candidates, overflow, ())
+        return self._state(sizes, path_sizes, candidates, overflow, (), x)
 
     def _pairing(self, x, surface, mask, slave_node, slave_body):
         """The checked pair keywords of one (unbatched) call."""
@@ -307,7 +338,7 @@ class Search:
             if x_prev is not None:
                 path_sizes = measure_batch(x, pooled, x_prev=x_prev, mask=mask, **self._sizing)
                 path_sizes = self._merged(path_sizes, at_least, "path_sizes")
-        return self._state(sizes, path_sizes, candidates, overflow, x.shape[:1])
+        return self._state(sizes, path_sizes, candidates, overflow, x.shape[:1], x)
 
     def init(
         self,
@@ -336,10 +367,14 @@ class Search:
         if sizes is not None:
             _bucket.check_sizes(sizes, x.shape[0], for_paths=False)
             candidates, overflow = self._find(x, surface, mask, sizes, pool)
-        return self._state(sizes, path_sizes, candidates, overflow, ())
+        return self._state(sizes, path_sizes, candidates, overflow, (), x)
 
-    def _state(self, sizes, path_sizes, candidates, overflow, batch) -> SearchState:
+    def _state(self, sizes, path_sizes, candidates, overflow, batch, x) -> SearchState:
+        history = None
+        if self.track:
+            history = _track.empty_history(x.shape[-2], x.dtype, batch)
         return SearchState(
+            history=history,
             sizes=sizes,
             path_sizes=path_sizes,
             candidates=candidates,
@@ -412,8 +447,11 @@ class Search:
         radius=None,
         slave_node: Array | None = None,
         slave_body: Array | None = None,
-    ) -> tuple[Contact | ContactList, SearchState]:
+    ) -> Closest:
         """The closest master segment of every slave within ``radius``: one step.
+
+        Returns ``(contact, state)``, or ``(contact, state, slip)`` with
+        ``track=True``.
 
         Runs under ``jit``, ``lax.scan``, ``vmap`` and ``grad`` (gradients of
         the gaps and points with respect to ``x`` and ``surface.nodes``, as
@@ -434,15 +472,20 @@ class Search:
           radius=radius, mask=mask, ...)`` whenever ``contact.overflow`` is
           False; when it is True, a contact may be missing: allocate again.
           A compact search returns a ``ContactList`` instead, whose
-          ``to_contact(N)`` is that ``Contact``.
+          ``to_contact(N)`` is that ``Contact``. A search with
+          ``track=True`` returns ``(contact, state, slip)``: the ``Slip`` of
+          every slave since the last step (``jaxcontact.track``).
         """
         if self.radius is None:
             raise ValueError("closest needs a Search with a radius; this one searches paths only")
         radius = self.radius if radius is None else radius
         x, surface, radius, mask = _inputs.check_contact_inputs(x, surface, radius, mask)
         pairing = self._pairing(x, surface, mask, slave_node, slave_body)
+        if self.track and state.history is None:
+            raise ValueError("state has no slip history: allocate it with this search (track=True)")
         if self.method == "exhaustive":
-            return _dense._all_to_all(x, surface, radius, mask, pairing), state
+            contact = _dense._all_to_all(x, surface, radius, mask, pairing)
+            return self._finish(contact, state, x, surface)
         if state.sizes is None:
             raise ValueError(
                 "state has no closest-point sizes: make it with this search's allocate"
@@ -455,7 +498,18 @@ class Search:
                 "allocate with this search"
             )
         self._check_state(state, x, surface)
-        return _closest(self, state, x, surface, mask, radius, pairing)
+        contact, state = _closest(self, state, x, surface, mask, radius, pairing)
+        return self._finish(contact, state, x, surface)
+
+    def _finish(self, contact, state: SearchState, x, surface: Surface):
+        """Smooth normals and the slip history, where this search asks for them."""
+        if self.normals == "smooth":
+            contact = _normals.smoothed_jit(contact, x, surface, self.corner)
+        if not self.track:
+            return contact, state
+        history = _track.history_of(contact, x.shape[0])
+        slip = _track_jit(state.history, contact, surface)
+        return contact, dataclasses.replace(state, history=history), slip
 
     def _check_state(self, state: SearchState, x, surface: Surface):
         """The state was allocated by a search of this reach, for these shapes."""
@@ -588,3 +642,8 @@ def _closest(search: Search, state: SearchState, x, surface, mask, radius, pairi
         last_rebuild=jnp.where(stale != 0, stale, state.last_rebuild),
     )
     return contact, state
+
+
+@jax.jit
+def _track_jit(history, contact, surface):
+    return _track.track(history, contact, surface)

@@ -30,7 +30,7 @@ from jax.sharding import PartitionSpec as P
 from jaxcontact import _bucket, _inputs
 from jaxcontact._bucket import bucket_sort, bucket_swept
 from jaxcontact._sizes import Sizes, measure_batch
-from jaxcontact._types import Array, Contact, Surface
+from jaxcontact._types import Array, Surface
 
 
 def shard_rows(num_rows: int, num_shards: int) -> int:
@@ -201,26 +201,3 @@ def _sized(detector, points, surface, rows, num_shards: int, arrays) -> _Sized:
     )
     arrays["radius"] = radius
     return _Sized(_device_sizes(detector, points, surface, rows, num_shards, radius))
-
-
-def contact_forces(
-    contact: Contact, stiffness, *, axis_name: str | None = None
-) -> tuple[Array, Array]:
-    """Penalty forces of a ``Contact``: on each slave, and their reaction on the master.
-
-    The force on an active slave is ``stiffness * (-gap) * normal`` (it pushes
-    the slave out along the master's outward normal); inactive rows get zero.
-    The master takes the opposite of their sum. Inside ``jax.shard_map`` with
-    the slaves split over ``axis_name``, that sum is a ``psum`` over the
-    devices; under ``jit`` with sharded inputs, XLA inserts the same
-    collective for the plain sum.
-
-    Returns:
-      ``(on_slaves f[N, 2], on_master f[2])``.
-    """
-    depth = jnp.where(contact.active, -contact.gap, 0)
-    on_slaves = (stiffness * depth)[:, None] * contact.normal
-    on_master = -jnp.sum(on_slaves, axis=0)
-    if axis_name is not None:
-        on_master = jax.lax.psum(on_master, axis_name)
-    return on_slaves, on_master
