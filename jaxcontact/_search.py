@@ -508,7 +508,7 @@ class Search:
         if not self.track:
             return contact, state
         history = _track.history_of(contact, x.shape[0])
-        slip = _track_jit(state.history, contact, surface)
+        slip = _track.track(state.history, contact, surface)
         return contact, dataclasses.replace(state, history=history), slip
 
     def _check_state(self, state: SearchState, x, surface: Surface):
@@ -642,8 +642,3 @@ def _closest(search: Search, state: SearchState, x, surface, mask, radius, pairi
         last_rebuild=jnp.where(stale != 0, stale, state.last_rebuild),
     )
     return contact, state
-
-
-@jax.jit
-def _track_jit(history, contact, surface):
-    return _track.track(history, contact, surface)

@@ -133,6 +133,7 @@ def track(last, contact: Contact | ContactList, surface: Surface) -> Slip:
     return _track(last, contact, surface)
 
 
+@jax.jit
 def _track(last: History, contact: Contact, surface: Surface) -> Slip:
     dtype = contact.point.dtype
     nodes, indices = surface.nodes, surface.segments

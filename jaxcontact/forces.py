@@ -51,6 +51,7 @@ penalty lets slaves penetrate by ``f_n / stiffness``.
 
 from __future__ import annotations
 
+import functools
 from typing import NamedTuple
 
 import jax
@@ -172,6 +173,7 @@ def _weight(two_pass: bool) -> float:
     return 0.5 if two_pass else 1.0
 
 
+@functools.partial(jax.jit, static_argnames=("num_slaves", "two_pass"))
 def penalty(
     contact: Contact | ContactList,
     surface: Surface,
@@ -213,6 +215,7 @@ def penalty(
     return _assemble(entries, force, surface, num_slaves)
 
 
+@functools.partial(jax.jit, static_argnames="two_pass")
 def coulomb(
     contact: Contact | ContactList,
     slip: Slip,
