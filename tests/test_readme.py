@@ -89,3 +89,24 @@ def test_readme_simulation_snippet_runs():
     history, grads = namespace["history"], namespace["grads"]
     assert float(history.force[:, 0].mean()) > 0  # the tool pushes the workpiece in -x
     assert all(bool(abs(value) > 0) for value in (grads.rake, grads.stiffness))
+
+
+def test_readme_friction_snippet_runs():
+    import jax
+    import jax.numpy as jnp
+
+    import jaxcontact
+    from jaxcontact.scenes import cutting_scene
+
+    section = README.read_text().split("### Friction: slip history")[1]
+    (snippet,) = re.findall(r"```python\n(.*?)```", section.split("\n### ")[0], flags=re.S)
+    scene = cutting_scene(600, 18.0)
+    # Three steps of the slaves sliding 0.01 along x under the tool.
+    xs = jnp.stack([scene.x.at[:, 0].add(0.01 * k) for k in range(3)])
+    namespace = {"jax": jax, "jaxcontact": jaxcontact, "x0": scene.x, "surface": scene.surface}
+    namespace["xs"] = xs
+    exec(compile(snippet, str(README), "exec"), namespace)
+    assert namespace["on_slaves"].shape == xs.shape
+    assert bool(jnp.isfinite(namespace["on_slaves"]).all())
+    assert float(jnp.abs(namespace["on_slaves"]).sum()) > 0
+    assert float(jnp.abs(namespace["friction"].traction).sum()) > 0  # it slid under friction
