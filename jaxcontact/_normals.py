@@ -15,9 +15,10 @@ and the jump stays.
 
 Why this and not a curved patch (a 2D Nagata or Hermite segment): the
 closest point stays the one on the straight segment that the search found,
-so nothing is searched again and the gap, ``xi``, the segment and the
+so nothing is searched again and the point, ``xi``, the segment and the
 vertex are the faceted ones; only the direction changes. The gap is
-measured along the normal used, ``(x - point) . n(xi)``: continuous across a
+measured along the normal used, ``(x - point) . n(xi)`` (at a vertex kept
+sharp, the flat gap ``+-|x - point|``, so ``corner=0`` is the flat search): continuous across a
 smoothed vertex (in a convex vertex's region the point is the vertex and the
 normal is the nodal one on both sides) and of the faceted gap's sign
 wherever the two normals are less than 90 degrees apart. What it leaves out:
@@ -65,8 +66,9 @@ def _unit(vectors: Array) -> Array:
     return jnp.where(squared > 0, vectors / jnp.sqrt(safe), 0)
 
 
-def end_normals(surface: Surface, corner: float) -> Array:
-    """f[M, 2, 2]: the normal of each segment at its start and at its end node.
+def end_normals(surface: Surface, corner: float) -> tuple[Array, Array]:
+    """``(f[M, 2, 2], bool[M, 2])``: the normal of each segment at its start and
+    at its end node, and whether it is smoothed there.
 
     The bisector of the two segments' normals where the outline turns there by
     less than ``corner`` degrees, the segment's own normal elsewhere (an open
@@ -81,9 +83,10 @@ def end_normals(surface: Surface, corner: float) -> Array:
     def at_end(neighbour):
         other = own[jnp.maximum(neighbour, 0)]
         smooth = (neighbour >= 0) & (jnp.sum(own * other, axis=-1) > threshold)
-        return jnp.where(smooth[:, None], _unit(own + other), own)
+        return jnp.where(smooth[:, None], _unit(own + other), own), smooth
 
-    return jnp.stack([at_end(before), at_end(after)], axis=1)
+    (start, smooth_start), (end, smooth_end) = at_end(before), at_end(after)
+    return jnp.stack([start, end], axis=1), jnp.stack([smooth_start, smooth_end], axis=1)
 
 
 def smoothed(result, x: Array, surface: Surface, corner: float):
@@ -96,13 +99,18 @@ def smoothed(result, x: Array, surface: Surface, corner: float):
         rows = x[jnp.clip(result.node, 0, max(x.shape[0] - 1, 0))] if x.shape[0] else x
     else:
         rows = x
-    ends = end_normals(surface, corner)[jnp.clip(result.segment, 0, num_segments - 1)]
+    chosen = jnp.clip(result.segment, 0, num_segments - 1)
+    normals, smooth = end_normals(surface, corner)
+    ends, smooth = normals[chosen], smooth[chosen]
     xi = result.xi[:, None]
     normal = _unit((1 - xi) * ends[:, 0] + xi * ends[:, 1])
     found = result.found
     rows = jnp.where(found[:, None], rows, result.point)
     normal = jnp.where(found[:, None], normal, 0)
-    gap = jnp.where(found, jnp.sum((rows - result.point) * normal, axis=-1), 0)
+    gap = jnp.sum((rows - result.point) * normal, axis=-1)
+    # At a vertex kept sharp the normal is the segment's own: keep the flat gap there.
+    sharp_vertex = (result.vertex >= 0) & ~jnp.where(result.xi >= 0.5, smooth[:, 1], smooth[:, 0])
+    gap = jnp.where(found, jnp.where(sharp_vertex, result.gap, gap), 0)
     return result._replace(gap=gap, normal=normal, active=found & (gap < 0))
 
 

@@ -22,7 +22,7 @@ from jaxcontact.forces import penalty
 from tests.helpers import FLOAT, assert_same_contact, local_atol
 
 TURN = 7.5  # degrees: the turn at each inner vertex of the arc
-ARC = 24  # arc segments: 0..23; then the top (24), the back (25), the bottom (26)
+ARC = 24  # arc segments: 0..23; then the top (24), the back (25), the bottom (26), padding
 RADIUS = 0.3
 DEPTH = 0.01  # the sliding slaves run this far inside the circle
 STEP = 0.5  # degrees between consecutive sliding slaves
@@ -36,7 +36,11 @@ def d_outline(dtype=FLOAT) -> Surface:
     nodes = np.concatenate([arc, [[-1.0, 1.0], [-1.0, -1.0]]])
     start = np.arange(len(nodes))
     segments = np.stack([start, (start + 1) % len(nodes)], -1).astype(np.int32)
-    return Surface(jnp.asarray(nodes, dtype), jnp.asarray(segments))
+    # Padding: a masked segment of zero length at an arc node, which must
+    # neither join that node's normal nor give a gradient NaN (0 / 0).
+    segments = np.concatenate([segments, [[3, 3]]]).astype(np.int32)
+    mask = np.arange(len(segments)) < len(nodes)
+    return Surface(jnp.asarray(nodes, dtype), jnp.asarray(segments), jnp.asarray(mask))
 
 
 SURFACE = d_outline()
@@ -109,6 +113,10 @@ def test_gap_is_measured_along_the_smooth_normal_with_the_flat_sign():
         np.testing.assert_array_equal(getattr(smooth, field), getattr(flat, field))
     x, point, normal = (np.asarray(v, np.float64) for v in (SCATTERED, smooth.point, smooth.normal))
     along = np.sum((x - point) * normal, -1)
+    # At the back's 90 degree corners (nodes 25, 26), kept sharp, the gap is the flat +-|x - v|.
+    sharp = np.isin(np.asarray(flat.vertex), [ARC + 1, ARC + 2])
+    assert sharp.sum() > 3
+    along = np.where(sharp, np.asarray(flat.gap), along)
     atol = local_atol(FLOAT, 2.0)
     np.testing.assert_allclose(np.asarray(smooth.gap)[found], along[found], atol=atol)
     np.testing.assert_allclose(np.linalg.norm(normal[found], axis=-1), 1, atol=atol)
@@ -139,7 +147,8 @@ def test_bucket_sort_and_search_give_all_to_all_smooth_normals():
 # vertex at (1, 0) inside (a tie of two facets) and outside (the vertex is the
 # closest point), on that vertex, on the diagonal of the 90 degree corner and
 # outside it; then three on facets' interiors.
-_EDGY = [(0.99, 0), (1.05, 0), (1, 0), (-0.99, 0.99), (-1.05, 1.05), (0.5, 0.8), (-0.5, 0.95), (-1.04, -0.3)]  # fmt: skip
+_EDGY = [(0.99, 0), (1.05, 0), (1, 0), (-0.99, 0.99), (-1.05, 1.05)]
+_EDGY += [(0.5, 0.8), (-0.5, 0.95), (-1.04, -0.3)]
 _MID = np.radians(-90 + TURN * (np.array([2, 9, 15]) + 0.5))
 _FACE = np.concatenate([np.stack([np.cos(_MID), np.sin(_MID)], -1) * r for r in (0.99, 1.05)])
 GRAD_SLAVES = {
@@ -149,7 +158,7 @@ GRAD_SLAVES = {
 
 
 def gap_total(x, nodes, power=2):
-    surface = Surface(nodes, SURFACE.segments)
+    surface = SURFACE._replace(nodes=nodes)
     return jnp.sum(all_to_all(x, surface, radius=RADIUS, normals="smooth").gap ** power)
 
 
@@ -181,14 +190,17 @@ def test_corner_below_the_turn_keeps_those_vertices_sharp():
     sharp, flat = contact_of(SCATTERED, corner=5.0), contact_of(SCATTERED, "flat")
     segment, xi = np.asarray(flat.segment), np.asarray(flat.xi)
     atol = local_atol(FLOAT, 2.0)
-    # The arc's inner facets turn by 7.5 degrees at both ends: flat normals,
-    # and on a face's interior the flat gap. (At a vertex the gap is still
-    # measured along the normal, (x - v) . n, where the flat one is +-|x - v|.)
+    # The arc's inner facets turn by 7.5 degrees at both ends: flat normals and
+    # flat gaps, at their vertices too (+-|x - v| there, not (x - v) . n).
     inner = (segment >= 1) & (segment <= ARC - 2)
     face = inner & (np.asarray(flat.vertex) < 0)
     assert face.sum() > 50 and (inner & ~face).sum() > 3
     np.testing.assert_allclose(sharp.normal[inner], flat.normal[inner], atol=atol)
-    np.testing.assert_allclose(sharp.gap[face], flat.gap[face], atol=atol)
+    np.testing.assert_allclose(sharp.gap[inner], flat.gap[inner], atol=atol)
+    # No corner smoothed at all: the flat search, every row.
+    none = contact_of(SCATTERED, corner=0.0)
+    np.testing.assert_allclose(none.gap, flat.gap, atol=atol)
+    np.testing.assert_allclose(none.normal, flat.normal, atol=atol)
     # Where the arc meets the top (a 3.75 degree turn) the normal still turns.
     top = (segment == ARC) & (xi < 0.5)
     assert top.sum() > 3
