@@ -255,7 +255,9 @@ class Search:
           at_least: a state (or ``Sizes``) that the new sizes must not be
             smaller than: to grow after an overflow without shrinking, or to
             size ahead of need for several configurations (allocate for
-            each, passing the last state).
+            each, passing the last state). With ``track=True`` the new state
+            keeps ``at_least``'s slip history (same rows), so a run regrown
+            mid-way (``resumable_scan``) loses no friction history.
           pool: optional bool[M]: segments masked now that may become real
             later (a new free surface). They are sized for and listed among
             the candidates as if real, so switching them on neither
@@ -292,7 +294,8 @@ class Search:
             if x_prev is not None:
                 path_sizes = measure(x, pooled, x_prev=x_prev, mask=mask, **self._sizing)
                 path_sizes = self._merged(path_sizes, at_least, "path_sizes")
-        return self._state(sizes, path_sizes, candidates, overflow, (), x)
+        state = self._state(sizes, path_sizes, candidates, overflow, (), x)
+        return _kept_history(state, at_least)
 
     def _pairing(self, x, surface, mask, slave_node, slave_body):
         """The checked pair keywords of one (unbatched) call."""
@@ -338,7 +341,8 @@ class Search:
             if x_prev is not None:
                 path_sizes = measure_batch(x, pooled, x_prev=x_prev, mask=mask, **self._sizing)
                 path_sizes = self._merged(path_sizes, at_least, "path_sizes")
-        return self._state(sizes, path_sizes, candidates, overflow, x.shape[:1], x)
+        state = self._state(sizes, path_sizes, candidates, overflow, x.shape[:1], x)
+        return _kept_history(state, at_least)
 
     def init(
         self,
@@ -483,6 +487,11 @@ class Search:
         pairing = self._pairing(x, surface, mask, slave_node, slave_body)
         if self.track and state.history is None:
             raise ValueError("state has no slip history: allocate it with this search (track=True)")
+        if self.track and state.history.found.shape != x.shape[:1]:
+            raise ValueError(
+                f"state's slip history has shape {state.history.found.shape} (one per slave); "
+                f"x has {x.shape[0]} rows: allocate with this x"
+            )
         if self.method == "exhaustive":
             contact = _dense._all_to_all(x, surface, radius, mask, pairing)
             return self._finish(contact, state, x, surface)
@@ -513,6 +522,7 @@ class Search:
 
     def _check_state(self, state: SearchState, x, surface: Surface):
         """The state was allocated by a search of this reach, for these shapes."""
+
         if state.reach is not None and state.reach < self._reach:
             raise ValueError(
                 f"state was allocated by a search reaching radius + skin = {state.reach:g}; "
@@ -594,6 +604,19 @@ def _batched_surface(surface: Surface, batch: int) -> Surface:
         _batched("surface.mask", surface.mask, 1, batch),
         _batched("surface.body", surface.body, 1, batch),
     )
+
+
+def _kept_history(state: SearchState, at_least) -> SearchState:
+    """``state`` with ``at_least``'s slip history, where both track the same rows."""
+    old = at_least.history if isinstance(at_least, SearchState) else None
+    if state.history is None or old is None:
+        return state
+    if jax.tree.map(jnp.shape, old) != jax.tree.map(jnp.shape, state.history):
+        raise ValueError(
+            f"at_least's slip history has shape {old.found.shape}; this allocation has "
+            f"{state.history.found.shape}"
+        )
+    return dataclasses.replace(state, history=old)
 
 
 def _check_unbatched(state: SearchState, method: str):

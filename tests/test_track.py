@@ -210,3 +210,22 @@ def test_rows_not_found_hold_zeros_and_batches_map():
     np.testing.assert_array_equal(np.asarray(slip.anchor[0, 0]), 0)
     assert float(slip.slip[0, 0]) == 0.0
     np.testing.assert_allclose(np.asarray(slip.slip[1]), 0, atol=1e-6)  # nothing moved
+
+
+def test_a_regrown_state_keeps_its_history_and_bad_states_are_refused():
+    xs, surfaces, slips, _ = scene(jnp.float32)
+    one = lambda t: Surface(surfaces.nodes[t], surfaces.segments, surfaces.mask)  # noqa: E731
+    search = Search(radius=RADIUS, method="dense", track=True)
+    state = search.allocate(xs[0], one(0))
+    _, state, _ = search.closest(state, xs[0], one(0))
+    # Reallocated at larger sizes (as resumable_scan's grow does): the history stays.
+    grown = Search(radius=RADIUS, method="dense", track=True, slack=3.0).allocate(
+        xs[1], one(1), at_least=state
+    )
+    _, _, slip = search.closest(grown, xs[1], one(1))
+    assert bool(slip.persisted.all())
+    np.testing.assert_allclose(np.asarray(slip.slip), slips[0], atol=2e-5)
+    with pytest.raises(ValueError, match="slip history has shape"):
+        search.closest(state, xs[1][:5], one(1))
+    with pytest.raises(ValueError, match="no slip history"):
+        search.closest(Search(radius=RADIUS, method="dense").allocate(xs[0], one(0)), xs[0], one(0))
