@@ -77,6 +77,7 @@ SECTIONS = {
         "{out}/long_process.md",
     ),
     "bodies": Section("Bodies, self-contact and a radius per slave", "bodies.py"),
+    "friction": Section("Slip tracking, friction and smooth normals", "friction.py"),
 }
 VERSIONED = (
     "jax",

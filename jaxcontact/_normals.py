@@ -37,6 +37,7 @@ import jax.numpy as jnp
 
 from jaxcontact import _inputs
 from jaxcontact._outline import vertex_neighbours
+from jaxcontact._rows import on_rows
 from jaxcontact._types import Array, ContactList, Surface
 
 NORMALS = ("flat", "smooth")
@@ -91,16 +92,34 @@ def end_normals(surface: Surface, corner: float) -> tuple[Array, Array]:
 
 def smoothed(result, x: Array, surface: Surface, corner: float):
     """``result`` (a ``Contact`` or ``ContactList`` of the slaves ``x``) with
-    the smooth normal and the gap along it; ``active`` follows the new gap."""
+    the smooth normal and the gap along it; ``active`` follows the new gap.
+    Only found rows are worked on (``_rows.on_rows``)."""
     num_segments = surface.segments.shape[0]
-    if num_segments == 0:
+    if num_segments == 0 or x.shape[0] == 0:
         return result
+    table = end_normals(surface, corner)
     if isinstance(result, ContactList):
-        rows = x[jnp.clip(result.node, 0, max(x.shape[0] - 1, 0))] if x.shape[0] else x
+        rows = x.at[result.node].get(mode="fill", fill_value=0)
+        normal, gap = _along(result, rows, table, num_segments)
     else:
-        rows = x
+
+        def at_rows(rows):
+            found = result._replace(
+                **{
+                    name: getattr(result, name).at[rows].get(mode="fill", fill_value=0)
+                    for name in ("gap", "xi", "segment", "point", "vertex", "found")
+                }
+            )
+            return _along(found, x.at[rows].get(mode="fill", fill_value=0), table, num_segments)
+
+        normal, gap = on_rows(result.found, at_rows)
+    return result._replace(gap=gap, normal=normal, active=result.found & (gap < 0))
+
+
+def _along(result, rows: Array, table, num_segments: int):
+    """``(normal, gap)`` of the entries of ``result`` at the slaves ``rows``."""
     chosen = jnp.clip(result.segment, 0, num_segments - 1)
-    normals, smooth = end_normals(surface, corner)
+    normals, smooth = table
     ends, smooth = normals[chosen], smooth[chosen]
     xi = result.xi[:, None]
     normal = _unit((1 - xi) * ends[:, 0] + xi * ends[:, 1])
@@ -111,7 +130,7 @@ def smoothed(result, x: Array, surface: Surface, corner: float):
     # At a vertex kept sharp the normal is the segment's own: keep the flat gap there.
     sharp_vertex = (result.vertex >= 0) & ~jnp.where(result.xi >= 0.5, smooth[:, 1], smooth[:, 0])
     gap = jnp.where(found, jnp.where(sharp_vertex, result.gap, gap), 0)
-    return result._replace(gap=gap, normal=normal, active=found & (gap < 0))
+    return normal, gap
 
 
 smoothed_jit = jax.jit(smoothed, static_argnums=3)

@@ -29,6 +29,7 @@ import jax.numpy as jnp
 
 from jaxcontact import _inputs
 from jaxcontact._outline import chains, vertex_neighbours
+from jaxcontact._rows import on_rows
 from jaxcontact._types import Array, Contact, ContactList, Surface
 
 # Segments walked each way from last step's segment before the arc
@@ -72,7 +73,19 @@ def empty_history(num_slaves: int, dtype, batch: tuple = ()) -> History:
 def history_of(contact: Contact | ContactList, num_slaves: int) -> History:
     """The ``History`` a contact leaves (a ``ContactList`` is spread over ``num_slaves`` rows)."""
     if isinstance(contact, ContactList):
-        contact = contact.to_contact(num_slaves)
+        rows = contact.node
+
+        def spread(values, empty):
+            base = jnp.full((num_slaves,), empty, values.dtype)
+            return base.at[rows].set(values, mode="drop")
+
+        found = contact.found
+        return History(
+            segment=spread(jnp.where(found, contact.segment, -1), -1),
+            xi=spread(jax.lax.stop_gradient(jnp.where(found, contact.xi, 0)), 0),
+            found=spread(found, False),
+            active=spread(contact.active, False),
+        )
     found = contact.found
     return History(
         segment=jnp.where(found, contact.segment, -1),
@@ -123,9 +136,7 @@ def track(last, contact: Contact | ContactList, surface: Surface) -> Slip:
     if not isinstance(last, History):
         last = history_of(last, last.found.shape[0])
     num_slaves = last.found.shape[0]
-    if isinstance(contact, ContactList):
-        contact = contact.to_contact(num_slaves)
-    if contact.found.shape != last.found.shape:
+    if isinstance(contact, Contact) and contact.found.shape != last.found.shape:
         raise ValueError(
             f"contact must have the last step's {num_slaves} rows; got {contact.found.shape[0]}"
         )
@@ -133,27 +144,79 @@ def track(last, contact: Contact | ContactList, surface: Surface) -> Slip:
     return _track(last, contact, surface)
 
 
+class _Now(NamedTuple):
+    """This step's contact at some rows."""
+
+    segment: Array
+    xi: Array
+    point: Array
+    found: Array
+    active: Array
+
+
 @jax.jit
-def _track(last: History, contact: Contact, surface: Surface) -> Slip:
-    dtype = contact.point.dtype
+def _track(last: History, contact, surface: Surface) -> Slip:
+    num_slaves = last.found.shape[0]
+    if surface.segments.shape[0] == 0:  # nothing was found, now or then
+        dtype = contact.point.dtype
+        zeros = jnp.zeros((num_slaves,), dtype)
+        return Slip(zeros, jnp.zeros((num_slaves,), bool), jnp.zeros((num_slaves, 2), dtype))
+    links = _links(surface)
+    if isinstance(contact, ContactList):
+        # The entries are the rows: no slave outside them was found.
+        now = _Now(contact.segment, contact.xi, contact.point, contact.found, contact.active)
+        slip = _slip_at(last, contact.node, now, surface, links)
+
+        def spread(values):
+            empty = jnp.zeros((num_slaves,) + values.shape[1:], values.dtype)
+            return empty.at[contact.node].set(values, mode="drop")
+
+        return jax.tree.map(spread, slip)
+
+    def at_rows(rows):
+        def read(values, fill):
+            return values.at[rows].get(mode="fill", fill_value=fill)
+
+        now = _Now(
+            read(contact.segment, -1),
+            read(contact.xi, 0),
+            read(contact.point, 0),
+            read(contact.found, False),
+            read(contact.active, False),
+        )
+        return _slip_at(last, rows, now, surface, links)
+
+    return on_rows(contact.found & last.found, at_rows)
+
+
+def _links(surface: Surface):
+    """The segments resolved, and each one's neighbours ``(before, after)``."""
+    segments = _inputs.resolve_segments(surface)
+    return segments, vertex_neighbours(segments)
+
+
+def _slip_at(last: History, rows: Array, now: _Now, surface: Surface, links) -> Slip:
+    """The ``Slip`` of the slaves ``rows`` (``N`` in unused slots), this step's contact ``now``."""
+    dtype = now.point.dtype
+    segments, (before, after) = links
     nodes, indices = surface.nodes, surface.segments
     num_segments = indices.shape[0]
-    both = contact.found & last.found
-    if num_segments == 0:
-        zeros = jnp.zeros(both.shape, dtype)
-        return Slip(zeros, both & False, jnp.zeros(both.shape + (2,), dtype))
+
+    def read(values, fill):
+        return values.at[rows].get(mode="fill", fill_value=fill)
+
+    last_found, last_active = read(last.found, False), read(last.active, False)
+    both = now.found & last_found
     ends = _inputs.ends_of(nodes, indices)  # f[M, 2, 2], the current nodes
     length = jnp.sqrt(jnp.sum((ends[:, 1] - ends[:, 0]) ** 2, axis=-1))
-    was = jnp.clip(last.segment, 0, num_segments - 1)
-    now = jnp.clip(contact.segment, 0, num_segments - 1)
-    xi_was = jnp.where(both, last.xi, 0).astype(dtype)
-    xi_now = jnp.where(both, contact.xi, 0)
+    was = jnp.clip(read(last.segment, -1), 0, num_segments - 1)
+    now_segment = jnp.clip(now.segment, 0, num_segments - 1)
+    xi_was = jnp.where(both, read(last.xi, 0), 0).astype(dtype)
+    xi_now = jnp.where(both, now.xi, 0)
     anchor = (1 - xi_was)[:, None] * ends[was, 0] + xi_was[:, None] * ends[was, 1]
 
-    segments = _inputs.resolve_segments(surface)
-    before, after = vertex_neighbours(segments)
-    same = was == now
-    along = (xi_now - xi_was) * length[now]
+    same = was == now_segment
+    along = (xi_now - xi_was) * length[now_segment]
 
     def walk(links, first, sign):
         """Slip to ``now`` walking from ``was`` along ``links`` (after: +, before: -)."""
@@ -162,9 +225,9 @@ def _track(last: History, contact: Contact, surface: Surface) -> Slip:
         hit = jnp.zeros(both.shape, bool)
         value = jnp.zeros(both.shape, dtype)
         for _ in range(WALK):
-            here = (at == now) & (at >= 0) & ~hit
+            here = (at == now_segment) & (at >= 0) & ~hit
             last_part = xi_now if sign > 0 else 1 - xi_now
-            value = jnp.where(here, sign * (covered + last_part * length[now]), value)
+            value = jnp.where(here, sign * (covered + last_part * length[now_segment]), value)
             hit = hit | here
             safe = jnp.maximum(at, 0)
             covered = covered + jnp.where(at >= 0, length[safe], 0)
@@ -178,18 +241,19 @@ def _track(last: History, contact: Contact, surface: Surface) -> Slip:
         jnp.where(jnp.abs(slip_after) <= jnp.abs(slip_before), slip_after, slip_before),
         jnp.where(hit_after, slip_after, slip_before),
     )
-    tangent = (ends[now, 1] - ends[now, 0]) / jnp.where(length[now] > 0, length[now], 1)[:, None]
-    projected = jnp.sum((contact.point - anchor) * tangent, axis=-1)
+    safe_length = jnp.where(length[now_segment] > 0, length[now_segment], 1)
+    tangent = (ends[now_segment, 1] - ends[now_segment, 0]) / safe_length[:, None]
+    projected = jnp.sum((now.point - anchor) * tangent, axis=-1)
     far = both & ~same & ~hit_after & ~hit_before
     on_chain = jax.lax.cond(
         jnp.any(far),
-        lambda: _arc_slip(segments, was, now, xi_was, xi_now, projected),
+        lambda: _arc_slip(segments, was, now_segment, xi_was, xi_now, projected),
         lambda: projected,
     )
     slip = jnp.where(same, along, jnp.where(hit_after | hit_before, walked, on_chain))
     slip = jnp.where(both, slip, 0)
     anchor = jnp.where(both[:, None], anchor, 0)
-    return Slip(slip, contact.active & last.active, anchor)
+    return Slip(slip, now.active & last_active, anchor)
 
 
 def _arc_slip(segments, was, now, xi_was, xi_now, projected):

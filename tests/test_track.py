@@ -229,3 +229,33 @@ def test_a_regrown_state_keeps_its_history_and_bad_states_are_refused():
         search.closest(state, xs[1][:5], one(1))
     with pytest.raises(ValueError, match="no slip history"):
         search.closest(Search(radius=RADIUS, method="dense").allocate(xs[0], one(0)), xs[0], one(0))
+
+
+@pytest.mark.parametrize("found_rows", ["few", "many"])
+def test_many_rows_are_worked_on_compacted_or_all_alike(found_rows):
+    """Above 1,024 rows, tracking and smoothing gather the found rows into a
+    capacity of N / 16 (at least 1,024), or work on all rows when more are
+    found: both give each row what the 8-row scene gives it."""
+    from jaxcontact._rows import capacity
+
+    xs, surfaces, slips, _ = scene(jnp.float32)
+    one = lambda t: Surface(surfaces.nodes[t], surfaces.segments, surfaces.mask)  # noqa: E731
+    num_rows = 2048
+    assert capacity(num_rows) == 1024
+    copies = num_rows // len(SLIDES) if found_rows == "many" else 1
+    far = jnp.full((num_rows, 2), 100.0, jnp.float32)
+    last_x = far.at[: copies * len(SLIDES)].set(jnp.tile(xs[0], (copies, 1)))
+    x = far.at[: copies * len(SLIDES)].set(jnp.tile(xs[1], (copies, 1)))
+    last = all_to_all(last_x, one(0), radius=RADIUS)
+    now = all_to_all(x, one(1), radius=RADIUS, normals="smooth")
+    small = all_to_all(xs[1], one(1), radius=RADIUS, normals="smooth")
+    assert (int(now.found.sum()) > 1024) == (found_rows == "many")
+    slip = jaxcontact.track(last, now, one(1))
+    expected = np.zeros(num_rows)
+    expected[: copies * len(SLIDES)] = np.tile(slips[0], copies)
+    np.testing.assert_allclose(np.asarray(slip.slip), expected, atol=2e-5)
+    assert int(slip.persisted.sum()) == copies * len(SLIDES)
+    rows = slice(0, len(SLIDES))
+    np.testing.assert_allclose(np.asarray(now.normal[rows]), np.asarray(small.normal), atol=1e-6)
+    np.testing.assert_allclose(np.asarray(now.gap[rows]), np.asarray(small.gap), atol=1e-6)
+    np.testing.assert_array_equal(np.asarray(now.normal[copies * len(SLIDES) :]), 0)
