@@ -121,6 +121,7 @@ class _Entries(NamedTuple):
     segment: Array
     normal: Array
     active: Array
+    dense: bool  # the entries are the N rows of a Contact, in order
 
 
 def _entries(contact, num_slaves: int | None) -> tuple[_Entries, int]:
@@ -134,7 +135,15 @@ def _entries(contact, num_slaves: int | None) -> tuple[_Entries, int]:
     else:
         raise ValueError(f"contact must be a Contact or ContactList; got {type(contact).__name__}")
     active = contact.active & (contact.segment >= 0)
-    entries = _Entries(row, contact.gap, contact.xi, contact.segment, contact.normal, active)
+    entries = _Entries(
+        row,
+        contact.gap,
+        contact.xi,
+        contact.segment,
+        contact.normal,
+        active,
+        isinstance(contact, Contact),
+    )
     return entries, num_slaves
 
 
@@ -154,7 +163,10 @@ def _per_entry(name: str, values, entries: _Entries, num_slaves: int, dtype) -> 
 def _assemble(entries: _Entries, force: Array, surface: Surface, num_slaves: int) -> Forces:
     """Entry forces on the slaves, and their reaction on the master's nodes."""
     force = jnp.where(entries.active[:, None], force, 0)
-    on_slaves = jnp.zeros((num_slaves, 2), force.dtype).at[entries.row].add(force, mode="drop")
+    if entries.dense:  # one entry per slave, in order: no scatter
+        on_slaves = force
+    else:
+        on_slaves = jnp.zeros((num_slaves, 2), force.dtype).at[entries.row].add(force, mode="drop")
     num_nodes = surface.nodes.shape[0]
     if surface.segments.shape[0] == 0:
         return Forces(on_slaves, jnp.zeros((num_nodes, 2), force.dtype))
