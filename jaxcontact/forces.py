@@ -216,7 +216,7 @@ def penalty(
       >>> floor = Surface(jnp.array([[1.0, 0.0], [0.0, 0.0]]), jnp.array([[0, 1]]))
       >>> contact = all_to_all(jnp.array([[0.25, -0.5]]), floor, radius=1.0)
       >>> forces = penalty(contact, floor, 10.0)
-      >>> forces.on_slaves.tolist(), forces.on_master.tolist()
+      >>> (forces.on_slaves + 0.0).tolist(), (forces.on_master + 0.0).tolist()  # no -0.0
       ([[0.0, 5.0]], [[0.0, -1.25], [0.0, -3.75]])
     """
     entries, num_slaves = _entries(contact, num_slaves)

@@ -316,7 +316,15 @@ def test_self_contact_needs_slave_node_and_bad_pair_inputs_are_named():
     mesh = jax.make_mesh((1,), ("slaves",))
     with pytest.raises(ValueError, match="sharded.* splits the slave arrays only: slave_node"):
         jaxcontact.sharded(all_to_all, mesh)(x, surface, radius=0.1, slave_node=slave_node)
-    assert jaxcontact.__version__ == "0.3.0"
+
+
+def test_the_version_is_the_package_metadata():
+    import pathlib
+    import re
+
+    pyproject = pathlib.Path(__file__).resolve().parent.parent / "pyproject.toml"
+    (version,) = re.findall(r'^version = "([^"]+)"$', pyproject.read_text(), flags=re.M)
+    assert jaxcontact.__version__ == version
 
 
 def three_outlines():

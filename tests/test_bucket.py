@@ -219,7 +219,6 @@ def test_wrong_sizes_raise():
         Search().allocate(scene.x, scene.surface)
 
 
-@X64_OFF
 def test_masks_nan_padding_and_empty_inputs():
     scene = cutting_scene(1_000, 18.0, dtype=FLOAT)
     x = scene.x.at[::7].set(jnp.nan).at[3].set(jnp.inf)

@@ -138,8 +138,7 @@ def test_closest_under_vmap_one_allocation_for_the_batch():
     np.testing.assert_array_equal(state.rebuilds, [1, 1, 1])
 
 
-@pytest.mark.x64_off
-def test_gradients_equal_all_to_all():
+def test_gradients_equal_all_to_all():  # x64 off: tests/test_grad.py's gradients
     xs, nodes, segments = trajectory(FLOAT, steps=4, x_tip=19.0)
     search = Search(radius=RADIUS, skin=SKIN, method="binned")
     state = search.allocate(xs[0], surface_at(nodes[0], segments))
