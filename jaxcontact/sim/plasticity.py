@@ -144,8 +144,9 @@ def update(
       material: the ``JohnsonCook`` parameters.
       state: the ``PointState`` at the start of the step.
       strain_increment: f[S, 3], ``(d eps_xx, d eps_yy, d gamma_xy)`` in
-        plane strain (``gamma_xy = 2 eps_xy``; ``d eps_zz = 0``), in the
-        frame of ``state.stress``.
+        plane strain (``gamma_xy = 2 eps_xy``; ``d eps_zz = 0``), or f[S, 4],
+        ``(d eps_xx, d eps_yy, d eps_zz, d gamma_xy)`` (a B-bar element's
+        strain has a ``zz`` part), in the frame of ``state.stress``.
       dt: the step's duration (s), for the plastic strain rate.
 
     Returns:
@@ -153,15 +154,16 @@ def update(
       ``d eps_p`` (f[S]), whose ``sigma_y d eps_p`` is the plastic work.
     """
     g, k = material.shear_modulus, material.bulk_modulus
-    dxx, dyy, dgamma = strain_increment[..., 0], strain_increment[..., 1], strain_increment[..., 2]
-    volume = dxx + dyy
+    dxx, dyy, dgamma = strain_increment[..., 0], strain_increment[..., 1], strain_increment[..., -1]
+    dzz = strain_increment[..., 2] if strain_increment.shape[-1] == 4 else jnp.zeros_like(dxx)
+    volume = dxx + dyy + dzz
     mean = volume / 3
     # Hooke in rates: d sigma = 2 G de + K d(tr eps) I, de the deviatoric increment.
     increment = jnp.stack(
         [
             2 * g * (dxx - mean) + k * volume,
             2 * g * (dyy - mean) + k * volume,
-            2 * g * (0 - mean) + k * volume,
+            2 * g * (dzz - mean) + k * volume,
             g * dgamma,
         ],
         axis=-1,

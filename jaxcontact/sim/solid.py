@@ -1,0 +1,157 @@
+"""Large-deformation plane-strain quadrilaterals for the cutting simulation.
+
+The workpiece of an explicit orthogonal-cutting run: bilinear quadrilaterals
+(Q4), updated Lagrangian, 2x2 Gauss points, in units of mm, N, tonne, s.
+
+* **Kinematics** (Hughes and Winget, 1980, *Int. J. Numer. Meth. Eng.* 15,
+  1862-1867): over a step from ``x_n`` to ``x_{n+1}`` the displacement
+  increment's gradient is taken on the midpoint configuration,
+  ``L = d(du)/dx_{n+1/2}``; its symmetric part is the strain increment handed
+  to the material, its skew part ``W`` the spin, and the stress of the step's
+  start is rotated by ``R = (I - W/2)^-1 (I + W/2)`` first. The update is
+  incrementally objective: a rigid rotation of any size, taken in steps,
+  rotates the stress and strains nothing.
+* **No volumetric locking** (the reason for quadrilaterals: linear triangles
+  lock in isochoric plastic flow): the volumetric part of the strain
+  increment at every Gauss point is replaced by the element's mean
+  (the B-bar / mean-dilatation method: Nagtegaal, Parks and Rice, 1974;
+  Hughes, 1980, *Int. J. Numer. Meth. Eng.* 15, 1413-1418). The deviatoric
+  part keeps all four points, so there are no hourglass modes to control.
+* **Internal forces** ``f_a = -sum_g sigma_g . grad N_a(x_{n+1}) J_g w_g``
+  with the Cauchy stress on the current configuration, per unit thickness
+  (plane strain): forces in N per mm of width.
+* **Masses** lumped: a quarter of each element's mass to each of its nodes.
+
+The material is any ``update(material, state, strain_increment, dt)`` with
+``plasticity.update``'s signature; ``plasticity.JohnsonCook`` is AISI 1045.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import jax.numpy as jnp
+import numpy as np
+from jax import Array
+
+from jaxcontact.sim import plasticity
+
+_G = 1 / np.sqrt(3.0)
+GAUSS = np.array([[-_G, -_G], [_G, -_G], [_G, _G], [-_G, _G]])  # weights 1 each
+CORNERS = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
+
+
+def _shape_derivatives() -> np.ndarray:
+    """f64[4 points, 4 nodes, 2]: dN_a/d(xi, eta) of the bilinear shape functions."""
+    xi, eta = GAUSS[:, 0][:, None], GAUSS[:, 1][:, None]
+    dxi = 0.25 * CORNERS[None, :, 0] * (1 + CORNERS[None, :, 1] * eta)
+    deta = 0.25 * CORNERS[None, :, 1] * (1 + CORNERS[None, :, 0] * xi)
+    return np.stack([dxi, deta], axis=-1)
+
+
+DSHAPE = _shape_derivatives()
+
+
+class Quads(NamedTuple):
+    """A quadrilateral mesh: E elements over N nodes, counter-clockwise."""
+
+    nodes: Array  # f[N, 2]  reference coordinates (mm)
+    quads: Array  # i32[E, 4]  node indices, counter-clockwise
+    mass: Array  # f[N]  lumped nodal masses (t, per mm of thickness)
+
+
+def grid_mesh(width: float, height: float, nx: int, ny: int, density: float, dtype=jnp.float32):
+    """A ``width x height`` (mm) rectangle from the origin, ``nx x ny`` elements.
+
+    Node ``j * (nx + 1) + i`` sits at ``(i * width / nx, j * height / ny)``.
+    """
+    x, y = np.meshgrid(np.linspace(0, width, nx + 1), np.linspace(0, height, ny + 1))
+    nodes = np.stack([x.ravel(), y.ravel()], -1)
+    i, j = np.meshgrid(np.arange(nx), np.arange(ny))
+    first = (j * (nx + 1) + i).ravel()
+    quads = np.stack([first, first + 1, first + nx + 2, first + nx + 1], -1).astype(np.int32)
+    area = (width / nx) * (height / ny)
+    mass = np.zeros(len(nodes))
+    np.add.at(mass, quads.ravel(), density * area / 4)
+    return Quads(jnp.asarray(nodes, dtype), jnp.asarray(quads), jnp.asarray(mass, dtype))
+
+
+def _gradients(x_elements: Array) -> tuple[Array, Array]:
+    """``(dN/dx f[E, 4 points, 4 nodes, 2], det J f[E, 4 points])`` on ``x_elements`` f[E, 4, 2]."""
+    dshape = jnp.asarray(DSHAPE, x_elements.dtype)
+    jacobian = jnp.einsum("pad,ear->epdr", dshape, x_elements)  # dx_r/dxi_d
+    det = jacobian[..., 0, 0] * jacobian[..., 1, 1] - jacobian[..., 0, 1] * jacobian[..., 1, 0]
+    inverse = (
+        jnp.stack(
+            [
+                jnp.stack([jacobian[..., 1, 1], -jacobian[..., 0, 1]], -1),
+                jnp.stack([-jacobian[..., 1, 0], jacobian[..., 0, 0]], -1),
+            ],
+            -2,
+        )
+        / det[..., None, None]
+    )  # dxi_d/dx_r, as [r, d]
+    return jnp.einsum("pad,eprd->epar", dshape, inverse), det
+
+
+def strain_and_spin(quads: Quads, x_old: Array, x_new: Array) -> tuple[Array, Array]:
+    """The strain increment (``d eps_xx, d eps_yy, d eps_zz, d gamma_xy``, f[E, 4, 4])
+    with the B-bar mean volumetric part, and the spin increment ``W_xy`` (f[E, 4]).
+
+    B-bar: ``eps = dev(eps) + (theta / 3) I`` in 3D, ``theta`` the element's
+    mean volumetric increment; the point's own volume change is replaced,
+    which gives ``eps_zz = (theta - tr eps) / 3``, not 0, at a point."""
+    old, new = x_old[quads.quads], x_new[quads.quads]
+    grad, det = _gradients(0.5 * (old + new))
+    du = new - old
+    gradient = jnp.einsum("epar,eai->epir", grad, du)  # d(du_i)/dx_r
+    exx, eyy = gradient[..., 0, 0], gradient[..., 1, 1]
+    gamma = gradient[..., 0, 1] + gradient[..., 1, 0]
+    spin = 0.5 * (gradient[..., 0, 1] - gradient[..., 1, 0])
+    # Mean dilatation: every point takes the element's volume-weighted mean.
+    volume = exx + eyy
+    mean = jnp.sum(volume * det, axis=1, keepdims=True) / jnp.sum(det, axis=1, keepdims=True)
+    shift = (mean - volume) / 3
+    return jnp.stack([exx + shift, eyy + shift, shift, gamma], axis=-1), spin
+
+
+def rotate(stress: Array, spin: Array) -> Array:
+    """(xx, yy, zz, xy) stresses turned by the Hughes–Winget rotation of spin ``W_xy``.
+
+    In 2D, ``R = (I - W/2)^-1 (I + W/2)`` is a rotation by ``theta`` with
+    ``tan(theta / 2) = W_xy / 2`` (``W`` has ``W_xy = -W_yx``), so the stress
+    turns by ``sigma' = R sigma R^T``; ``sigma_zz`` is unchanged.
+    """
+    half = spin / 2
+    cos = (1 - half**2) / (1 + half**2)
+    sin = 2 * half / (1 + half**2)  # R = [[cos, sin], [-sin, cos]]
+    sxx, syy, szz, sxy = stress[..., 0], stress[..., 1], stress[..., 2], stress[..., 3]
+    c2, s2, cs = cos**2, sin**2, cos * sin
+    return jnp.stack(
+        [
+            c2 * sxx + 2 * cs * sxy + s2 * syy,
+            s2 * sxx - 2 * cs * sxy + c2 * syy,
+            szz,
+            -cs * sxx + (c2 - s2) * sxy + cs * syy,
+        ],
+        axis=-1,
+    )
+
+
+def internal_forces(quads: Quads, x: Array, stress: Array) -> Array:
+    """f[N, 2]: the nodal forces of the Cauchy ``stress`` (f[E, 4, 4]) on configuration ``x``."""
+    grad, det = _gradients(x[quads.quads])
+    sxx, syy, sxy = stress[..., 0], stress[..., 1], stress[..., 3]
+    tensor = jnp.stack([jnp.stack([sxx, sxy], -1), jnp.stack([sxy, syy], -1)], -2)
+    element = -jnp.einsum("epij,epaj,ep->eai", tensor, grad, det)
+    return jnp.zeros_like(x).at[quads.quads].add(element)
+
+
+def step_material(
+    material, quads: Quads, state: plasticity.PointState, x_old: Array, x_new: Array, dt
+) -> tuple[plasticity.PointState, Array]:
+    """The points' state after the motion ``x_old -> x_new`` in ``dt``: stress
+    rotated, then updated by the material; and the step's plastic strain increment."""
+    strain, spin = strain_and_spin(quads, x_old, x_new)
+    turned = state._replace(stress=rotate(state.stress, spin))
+    return plasticity.update(material, turned, strain, dt)
