@@ -1,0 +1,69 @@
+"""Explicit central differences for the Q4 workpiece (``solid``), contact forces given.
+
+One step of the scheme explicit crash and cutting codes use (Belytschko,
+Liu and Moran, *Nonlinear Finite Elements for Continua and Structures*,
+2000, section 6.2): accelerations from the forces at ``x_n``, velocities at
+the half step, positions at ``n + 1``, then the material updated over the
+motion ``x_n -> x_{n+1}``. Stable for ``dt`` below ``stable_dt`` (the
+smallest element's edge over the dilatational wave speed, times a safety
+factor). Boundary conditions: prescribed velocity components
+(``fixed``, with their values) replace the computed ones.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import jax.numpy as jnp
+from jax import Array
+
+from jaxcontact.sim import plasticity, solid
+
+
+class Body(NamedTuple):
+    """The workpiece's state between steps."""
+
+    x: Array  # f[N, 2]  positions (mm)
+    v: Array  # f[N, 2]  velocities at the last half step (mm/s)
+    points: plasticity.PointState  # [E, 4] Gauss points
+
+
+def at_rest(quads: solid.Quads, material: plasticity.JohnsonCook) -> Body:
+    """The mesh unstressed and at rest at room temperature."""
+    dtype = quads.nodes.dtype
+    points = plasticity.PointState.at_rest((quads.quads.shape[0], 4), material, dtype)
+    return Body(quads.nodes, jnp.zeros_like(quads.nodes), points)
+
+
+def stable_dt(quads: solid.Quads, material: plasticity.JohnsonCook, safety: float = 0.5) -> float:
+    """A stable step (s) on the reference mesh: shortest edge / wave speed x ``safety``."""
+    corners = quads.nodes[quads.quads]
+    edges = jnp.linalg.norm(corners - jnp.roll(corners, 1, axis=1), axis=-1)
+    modulus = material.bulk_modulus + 4 * material.shear_modulus / 3
+    return safety * float(edges.min()) / math.sqrt(modulus / material.density)
+
+
+def step(
+    material,
+    quads: solid.Quads,
+    body: Body,
+    external: Array,
+    dt,
+    fixed: Array | None = None,
+    velocity: Array | None = None,
+) -> tuple[Body, Array]:
+    """One explicit step under the ``external`` nodal forces (f[N, 2], N per mm).
+
+    ``fixed`` (bool[N, 2]) marks velocity components prescribed to
+    ``velocity`` (f[N, 2], zeros by default). Returns the new ``Body`` and
+    the step's plastic strain increments (f[E, 4]).
+    """
+    forces = solid.internal_forces(quads, body.x, body.points.stress) + external
+    v = body.v + dt * forces / quads.mass[:, None]
+    if fixed is not None:
+        given = jnp.zeros_like(v) if velocity is None else velocity
+        v = jnp.where(fixed, given, v)
+    x = body.x + dt * v
+    points, plastic = solid.step_material(material, quads, body.points, body.x, x, dt)
+    return Body(x, v, points), plastic
