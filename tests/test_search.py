@@ -267,7 +267,6 @@ def test_misuse_raises_a_clear_error():
         Search().closest(state, scene.x, scene.surface)
 
 
-@pytest.mark.x64_off
 def test_a_state_is_refused_by_a_search_or_shapes_it_was_not_allocated_for():
     scene = cutting_scene(2_000, 18.0)
     search = Search(radius=RADIUS, skin=SKIN, method="binned")
