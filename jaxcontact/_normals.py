@@ -53,7 +53,7 @@ def check_normals(normals, corner) -> float:
         raise ValueError(f"normals must be one of {NORMALS}; got {normals!r}")
     try:
         corner = float(corner)
-    except TypeError:
+    except (TypeError, ValueError):
         raise ValueError(f"corner must be an angle in degrees; got {corner!r}") from None
     if not (0 <= corner <= 180):
         raise ValueError(f"corner must lie in [0, 180] degrees; got {corner}")

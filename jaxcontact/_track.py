@@ -133,6 +133,11 @@ def track(last, contact: Contact | ContactList, surface: Surface) -> Slip:
       >>> round(float(slip.slip[0]), 6), bool(slip.persisted[0])  # along the segments
       (0.5, True)
     """
+    if isinstance(last, ContactList):
+        raise ValueError(
+            "last must be a Contact or a History (N rows); got a ContactList, whose N is "
+            "not known: pass last.to_contact(N)"
+        )
     if not isinstance(last, History):
         last = history_of(last, last.found.shape[0])
     num_slaves = last.found.shape[0]
@@ -208,7 +213,9 @@ def _slip_at(last: History, rows: Array, now: _Now, surface: Surface, links) -> 
     last_found, last_active = read(last.found, False), read(last.active, False)
     both = now.found & last_found
     ends = _inputs.ends_of(nodes, indices)  # f[M, 2, 2], the current nodes
-    length = jnp.sqrt(jnp.sum((ends[:, 1] - ends[:, 0]) ** 2, axis=-1))
+    squared = jnp.sum((ends[:, 1] - ends[:, 0]) ** 2, axis=-1)
+    # 0 with a zero gradient for a zero-length segment (padding reading one node twice).
+    length = jnp.where(squared > 0, jnp.sqrt(jnp.where(squared > 0, squared, 1)), 0)
     was = jnp.clip(read(last.segment, -1), 0, num_segments - 1)
     now_segment = jnp.clip(now.segment, 0, num_segments - 1)
     xi_was = jnp.where(both, read(last.xi, 0), 0).astype(dtype)

@@ -31,11 +31,16 @@ carried in ``Friction.traction`` in world coordinates and turned into the
 current tangent by the projection. The history is zeroed only where the
 slave is not in contact (``active``) now, and a contact that was not active
 at the last step starts from zero (``Slip.persisted``). The scheme is
-backward Euler in the slip, so it never creates energy: the energy
-dissipated in a step, ``-f_t slip - (E_now - E_last)`` with the stick
-spring's energy ``E = |traction|^2 / (2 tangent_stiffness)``, is at least 0
-(``Friction.dissipated``). The tangential force on the slave opposes its
-slip relative to the master; the master's nodes take its reaction.
+backward Euler in the slip, so it never creates energy: the work
+``-f_t slip`` taken from the relative motion in a step is at least the
+change of the stick spring's energy ``E = |traction|^2 / (2
+tangent_stiffness)``. ``Friction.dissipated`` is what sliding dissipated,
+``f_t (trial - f_t) / tangent_stiffness = mu f_n |s_p|`` with ``s_p`` the
+sliding (not elastic) part of the slip: zero while a contact sticks, >= 0
+always; the rest of the difference is the scheme's own numerical
+dissipation and the energy of a traction turned onto a new tangent. The
+tangential force on the slave opposes its slip relative to the master; the
+master's nodes take its reaction.
 
 **Two deformable bodies** searched both ways in one call (every node a
 slave, every outline a master, ``slave_body`` labels): each physical contact
@@ -56,6 +61,7 @@ from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from jaxcontact._track import Slip
 from jaxcontact._types import Array, Contact, ContactList, Surface
@@ -77,7 +83,7 @@ class Friction(NamedTuple):
 
     traction: Array  # f[N, 2]  tangential force on each slave at the last step, world coordinates
     stuck: Array  # bool[N]  in contact and sticking (not slipping)
-    dissipated: Array  # f[N]  energy dissipated by friction in the step, >= 0
+    dissipated: Array  # f[N]  energy dissipated by sliding in the step: mu f_n |s_p| >= 0
 
     @staticmethod
     def zeros(num_slaves: int, dtype=jnp.float32) -> Friction:
@@ -227,7 +233,17 @@ def penalty(
     return _assemble(entries, force, surface, num_slaves)
 
 
-@functools.partial(jax.jit, static_argnames="two_pass")
+def _non_negative(name: str, value, strictly: bool = False):
+    """A ``ValueError`` naming it when ``value`` is concrete and negative (zero, ``strictly``)."""
+    if any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree.leaves(value)):
+        return
+    values = np.asarray(value)
+    bad = values <= 0 if strictly else values < 0
+    if values.size and bool(np.any(bad | ~np.isfinite(values))):
+        bound = "> 0" if strictly else ">= 0"
+        raise ValueError(f"{name} must be finite and {bound}; got {value!r}")
+
+
 def coulomb(
     contact: Contact | ContactList,
     slip: Slip,
@@ -248,7 +264,7 @@ def coulomb(
         result, or ``jaxcontact.track``).
       friction: the ``Friction`` of the last step (``Friction.zeros(N)`` at the start).
       surface: the master now.
-      stiffness: normal penalty stiffness, scalar or f[N].
+      stiffness: normal penalty stiffness, scalar or f[N] (>= 0).
       tangent_stiffness: the stick spring's stiffness, scalar or f[N] (> 0).
       mu: the Coulomb coefficient, scalar or f[N] (>= 0).
       two_pass: weight both forces by 1/2 (see the module's notes). The
@@ -258,6 +274,40 @@ def coulomb(
       ``(forces, friction)``: normal plus tangential ``Forces``, and the
       ``Friction`` to pass to the next step.
     """
+    _non_negative("stiffness", stiffness)
+    _non_negative("tangent_stiffness", tangent_stiffness, strictly=True)
+    _non_negative("mu", mu)
+    num_slaves = slip.slip.shape[0]
+    if isinstance(contact, Contact) and contact.gap.shape[0] != num_slaves:
+        raise ValueError(
+            f"contact has {contact.gap.shape[0]} rows; slip has {num_slaves}: "
+            "they must be of the same slaves"
+        )
+    return _coulomb(
+        contact,
+        slip,
+        friction,
+        surface,
+        stiffness=stiffness,
+        tangent_stiffness=tangent_stiffness,
+        mu=mu,
+        two_pass=two_pass,
+    )
+
+
+@functools.partial(jax.jit, static_argnames="two_pass")
+def _coulomb(
+    contact: Contact | ContactList,
+    slip: Slip,
+    friction: Friction,
+    surface: Surface,
+    *,
+    stiffness,
+    tangent_stiffness,
+    mu,
+    two_pass: bool = False,
+) -> tuple[Forces, Friction]:
+    """``coulomb`` under ``jit``, its values checked."""
     num_slaves = slip.slip.shape[0]
     if friction.traction.shape[:1] != (num_slaves,):
         raise ValueError(
@@ -293,12 +343,11 @@ def coulomb(
     f_t = jnp.where(stuck, trial, cap * jnp.sign(trial))
     f_t = jnp.where(active, f_t, 0)
     traction = f_t[:, None] * tangent
-    # Energy dissipated this step: the work friction took from the relative
-    # motion, less what the stick spring stored.
+    # Energy dissipated by sliding this step: the force times the plastic
+    # (sliding) part of the slip, s_p = (f_t - trial) / k_t, which is zero
+    # while the contact sticks: mu f_n |s_p| = f_t (trial - f_t) / k_t >= 0.
     safe_k_t = jnp.where(k_t > 0, k_t, 1)
-    stored = jnp.sum(traction**2, axis=-1) / (2 * safe_k_t)
-    stored_last = jnp.sum(read(friction.traction, 0).astype(dtype) ** 2, axis=-1) / (2 * safe_k_t)
-    dissipated = jnp.where(persisted, -f_t * slipped - (stored - stored_last), 0)
+    dissipated = jnp.where(active, f_t * (trial - f_t) / safe_k_t, 0)
 
     weight = _weight(two_pass)
     force = weight * (f_n[:, None] * normal + traction)

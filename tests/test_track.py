@@ -259,3 +259,19 @@ def test_many_rows_are_worked_on_compacted_or_all_alike(found_rows):
     np.testing.assert_allclose(np.asarray(now.normal[rows]), np.asarray(small.normal), atol=1e-6)
     np.testing.assert_allclose(np.asarray(now.gap[rows]), np.asarray(small.gap), atol=1e-6)
     np.testing.assert_array_equal(np.asarray(now.normal[copies * len(SLIDES) :]), 0)
+
+
+def test_slip_gradients_are_finite_with_padding_and_zero_length_segments():
+    nodes = jnp.array([[0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [2.0, 0.0]])
+    segments = jnp.array([[2, 1], [1, 0], [-1, -1], [2, 3]])  # padding; a zero-length segment
+    mask = jnp.array([True, True, False, True])
+
+    def slid(nodes):
+        surface = Surface(nodes, segments, mask)
+        last = all_to_all(jnp.array([[1.2, -0.01]]), surface, radius=0.1)
+        now = all_to_all(jnp.array([[0.7, -0.01]]), surface, radius=0.1)
+        return jaxcontact.track(last, now, surface).slip[0]
+
+    assert float(slid(nodes)) == pytest.approx(0.5, abs=1e-6)
+    grad = np.asarray(jax.grad(slid)(nodes))
+    assert np.isfinite(grad).all() and np.abs(grad).sum() > 0
