@@ -357,7 +357,6 @@ def test_expired_candidates_can_miss_contacts_which_is_why_the_check_exists():
 # Regressions found in review.
 
 
-@X64_OFF
 def test_bucket_swept_ignores_a_nan_previous_position_like_swept():
     wall = Surface(jnp.asarray([[1.0, -1.0], [1.0, 1.0]]), jnp.asarray([[0, 1]], jnp.int32))
     x_prev = jnp.asarray([[jnp.nan, 0.0], [0.0, 0.5]])

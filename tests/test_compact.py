@@ -48,9 +48,7 @@ def assert_packs(entries: ContactList, dense, num_rows: int):
     np.testing.assert_allclose(summed, dense.gap, rtol=0, atol=tol)
 
 
-@pytest.mark.parametrize(
-    "scene_name", [pytest.param("cutting", marks=pytest.mark.x64_off), "rough die (cells)"]
-)
+@pytest.mark.parametrize("scene_name", ["cutting", "rough die (cells)"])
 def test_one_call_compact_packs_the_dense_rows(scene_name):
     if scene_name == "cutting":
         scene = cutting_scene(2_000, 18.0, dtype=FLOAT)
@@ -152,7 +150,6 @@ def test_compact_misuse_raises_a_clear_error():
         Search(radius=RADIUS, compact=True).closest(dense_state, scene.x, scene.surface)
 
 
-@pytest.mark.x64_off
 def test_slaves_at_the_radius_to_within_rounding_are_found_as_the_dense_form_finds_them():
     # Long segments (the rounding grows with them) and slaves a few ulps either
     # side of the radius, beside the faces and beyond the ends: the compact form

@@ -10,9 +10,6 @@ import jaxcontact
 from jaxcontact import Surface
 from tests.oracle import oracle_contact, oracle_crossing
 
-# All of this file runs again with x64 off (tests/test_x64_off.py).
-pytestmark = pytest.mark.x64_off
-
 MODES = pytest.mark.parametrize("mode", ["fwd", "rev"])
 
 # A concave corner: the master fills {y < 0} u {x < 0}, outline (2, 0) -> (0, 0) -> (0, 2).

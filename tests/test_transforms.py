@@ -9,9 +9,6 @@ import pytest
 import jaxcontact
 from tests import helpers
 
-# All of this file runs again with x64 off (tests/test_x64_off.py).
-pytestmark = pytest.mark.x64_off
-
 DTYPES = pytest.mark.parametrize("dtype", helpers.FLOAT_DTYPES, ids=lambda d: np.dtype(d).name)
 BATCH = 3
 
