@@ -52,18 +52,42 @@ def step(
     dt,
     fixed: Array | None = None,
     velocity: Array | None = None,
+    partner: Array | None = None,
+    alive: Array | None = None,
+    viscosity: tuple[float, float] | None = None,
 ) -> tuple[Body, Array]:
     """One explicit step under the ``external`` nodal forces (f[N, 2], N per mm).
 
     ``fixed`` (bool[N, 2]) marks velocity components prescribed to
-    ``velocity`` (f[N, 2], zeros by default). Returns the new ``Body`` and
-    the step's plastic strain increments (f[E, 4]).
+    ``velocity`` (f[N, 2], zeros by default). ``partner`` (i32[N]) ties
+    nodes in pairs: node ``i`` and ``partner[i]`` (``i`` itself for an
+    untied node) move as one node, their forces and masses summed, so two
+    coincident nodes stay together until the tie is dropped (the node
+    separation of a cutting run). ``alive`` (bool[E]) marks the elements
+    not eroded: an eroded one carries no stress and keeps its state.
+    ``viscosity`` ``(linear, quadratic)`` adds ``solid.bulk_viscosity``
+    (LS-DYNA's defaults are 0.06 and 1.5). Returns
+    the new ``Body`` and the step's plastic strain increments (f[E, 4]).
     """
-    forces = solid.internal_forces(quads, body.x, body.points.stress) + external
-    v = body.v + dt * forces / quads.mass[:, None]
+    pressure = None
+    if viscosity is not None:
+        modulus = material.bulk_modulus + 4 * material.shear_modulus / 3
+        wave = (modulus / material.density) ** 0.5
+        pressure = solid.bulk_viscosity(quads, body.x, body.v, material.density, wave, *viscosity)
+    forces = solid.internal_forces(quads, body.x, body.points.stress, alive, pressure) + external
+    mass = quads.mass
+    if partner is not None:
+        # Summed in the same order for both nodes of a pair: they get the
+        # same bits, so tied nodes never drift apart.
+        tied = partner != jnp.arange(partner.shape[0])
+        low = jnp.minimum(jnp.arange(partner.shape[0]), partner)
+        high = jnp.maximum(jnp.arange(partner.shape[0]), partner)
+        forces = jnp.where(tied[:, None], forces[low] + forces[high], forces)
+        mass = jnp.where(tied, mass[low] + mass[high], mass)
+    v = body.v + dt * forces / mass[:, None]
     if fixed is not None:
         given = jnp.zeros_like(v) if velocity is None else velocity
         v = jnp.where(fixed, given, v)
     x = body.x + dt * v
-    points, plastic = solid.step_material(material, quads, body.points, body.x, x, dt)
+    points, plastic = solid.step_material(material, quads, body.points, body.x, x, dt, alive)
     return Body(x, v, points), plastic

@@ -30,6 +30,7 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 from jax import Array
@@ -94,14 +95,35 @@ def _gradients(x_elements: Array) -> tuple[Array, Array]:
     return jnp.einsum("pad,eprd->epar", dshape, inverse), det
 
 
-def strain_and_spin(quads: Quads, x_old: Array, x_new: Array) -> tuple[Array, Array]:
+def _corners(quads: Quads, x: Array, alive: Array | None) -> Array:
+    """f[E, 4, 2]: each element's corners on ``x``; an eroded element's
+    (``alive`` False) on the reference mesh, so that its (unused) kinematics
+    stay finite however tangled its nodes are."""
+    corners = x[quads.quads]
+    if alive is None:
+        return corners
+    return jnp.where(alive[:, None, None], corners, quads.nodes[quads.quads])
+
+
+def distortion(quads: Quads, x: Array) -> Array:
+    """f[E]: the smallest ratio over an element's Gauss points of ``det J`` on
+    ``x`` to ``det J`` on the reference mesh (1 undeformed in area; 0 or below:
+    the element is folded)."""
+    _, now = _gradients(x[quads.quads])
+    _, then = _gradients(quads.nodes[quads.quads])
+    return jnp.min(now / then, axis=1)
+
+
+def strain_and_spin(
+    quads: Quads, x_old: Array, x_new: Array, alive: Array | None = None
+) -> tuple[Array, Array]:
     """The strain increment (``d eps_xx, d eps_yy, d eps_zz, d gamma_xy``, f[E, 4, 4])
     with the B-bar mean volumetric part, and the spin increment ``W_xy`` (f[E, 4]).
 
     B-bar: ``eps = dev(eps) + (theta / 3) I`` in 3D, ``theta`` the element's
     mean volumetric increment; the point's own volume change is replaced,
     which gives ``eps_zz = (theta - tr eps) / 3``, not 0, at a point."""
-    old, new = x_old[quads.quads], x_new[quads.quads]
+    old, new = _corners(quads, x_old, alive), _corners(quads, x_new, alive)
     grad, det = _gradients(0.5 * (old + new))
     du = new - old
     gradient = jnp.einsum("epar,eai->epir", grad, du)  # d(du_i)/dx_r
@@ -138,9 +160,35 @@ def rotate(stress: Array, spin: Array) -> Array:
     )
 
 
-def internal_forces(quads: Quads, x: Array, stress: Array) -> Array:
-    """f[N, 2]: the nodal forces of the Cauchy ``stress`` (f[E, 4, 4]) on configuration ``x``."""
+def bulk_viscosity(quads: Quads, x: Array, v: Array, density, wave_speed, linear, quadratic):
+    """f[E]: the artificial bulk viscosity pressure ``q`` (MPa) of each element
+    under the velocities ``v`` (von Neumann and Richtmyer, 1950; in the form of
+    LS-DYNA's theory manual, section 18):
+    ``q = rho l (quadratic l d^2 - linear c d)`` where the volumetric rate
+    ``d = div v < 0`` (compression), 0 otherwise, ``l`` the element's size
+    (square root of its area) and ``c`` the wave speed. It damps the ringing
+    of shocks and contacts over a few elements; it is added to the pressure of
+    the internal forces only, never to the material's state."""
     grad, det = _gradients(x[quads.quads])
+    rate = jnp.einsum("epar,ear->ep", grad, v[quads.quads])  # div v at each point
+    area = jnp.sum(det, axis=1)  # the weights are 1
+    rate = jnp.sum(rate * det, axis=1) / area
+    size = jnp.sqrt(jnp.abs(area))
+    squeeze = jnp.minimum(rate, 0)
+    return density * size * (quadratic * size * squeeze**2 - linear * wave_speed * squeeze)
+
+
+def internal_forces(
+    quads: Quads, x: Array, stress: Array, alive: Array | None = None, pressure=None
+) -> Array:
+    """f[N, 2]: the nodal forces of the Cauchy ``stress`` (f[E, 4, 4]) on
+    configuration ``x``; none from elements not ``alive`` (bool[E], eroded);
+    ``pressure`` (f[E]) is added to each element's pressure (bulk viscosity)."""
+    grad, det = _gradients(_corners(quads, x, alive))
+    if pressure is not None:
+        stress = stress - pressure[:, None, None] * jnp.asarray([1.0, 1.0, 1.0, 0.0], stress.dtype)
+    if alive is not None:
+        stress = jnp.where(alive[:, None, None], stress, 0)
     sxx, syy, sxy = stress[..., 0], stress[..., 1], stress[..., 3]
     tensor = jnp.stack([jnp.stack([sxx, sxy], -1), jnp.stack([sxy, syy], -1)], -2)
     element = -jnp.einsum("epij,epaj,ep->eai", tensor, grad, det)
@@ -148,10 +196,28 @@ def internal_forces(quads: Quads, x: Array, stress: Array) -> Array:
 
 
 def step_material(
-    material, quads: Quads, state: plasticity.PointState, x_old: Array, x_new: Array, dt
+    material,
+    quads: Quads,
+    state: plasticity.PointState,
+    x_old: Array,
+    x_new: Array,
+    dt,
+    alive: Array | None = None,
 ) -> tuple[plasticity.PointState, Array]:
     """The points' state after the motion ``x_old -> x_new`` in ``dt``: stress
-    rotated, then updated by the material; and the step's plastic strain increment."""
-    strain, spin = strain_and_spin(quads, x_old, x_new)
+    rotated, then updated by the material; and the step's plastic strain
+    increment. Eroded elements (``alive`` False) keep their state."""
+    strain, spin = strain_and_spin(quads, x_old, x_new, alive)
     turned = state._replace(stress=rotate(state.stress, spin))
-    return plasticity.update(material, turned, strain, dt)
+    new, plastic = plasticity.update(material, turned, strain, dt)
+    if alive is None:
+        return new, plastic
+    keep = alive[:, None]
+    new = jax.tree.map(
+        lambda after, before: jnp.where(
+            keep.reshape(keep.shape + (1,) * (after.ndim - 2)), after, before
+        ),
+        new,
+        state,
+    )
+    return new, jnp.where(keep, plastic, 0)

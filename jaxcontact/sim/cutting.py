@@ -1,0 +1,795 @@
+"""Orthogonal cutting of AISI 1045 that forms a chip: the source paper's simulation, in JAX.
+
+A rigid carbide tool (rake angle ``rake``, clearance 7°, edge radius
+``edge_radius``) cuts a plane-strain AISI 1045 workpiece at the cutting speed
+``speed`` with the uncut chip thickness ``uncut``. Everything runs in one
+``lax.scan`` of fixed shapes, on jaxcontact's public names only: a
+``jaxcontact.Search`` finds every contact, ``jaxcontact.forces.coulomb``
+turns it into forces. Units: mm, N, tonne, s, K (stresses in MPa, forces per
+mm of width in N/mm).
+
+The model, and why:
+
+* **Material** (``sim.plasticity``): J2 flow with the Johnson–Cook flow
+  stress of Jaspers and Dautzenberg (2002) for AISI 1045, adiabatic heating
+  with a Taylor–Quinney coefficient of 0.9. No heat conduction, no damage.
+* **Elements** (``sim.solid``): updated-Lagrangian bilinear quadrilaterals,
+  2x2 Gauss points, the B-bar mean dilatation against volumetric locking in
+  isochoric plastic flow, the Hughes–Winget rotation of the stress for
+  objectivity. Square elements of edge ``element`` (the uncut layer is
+  ``uncut / element`` elements thick).
+* **Chip separation** by node separation along a parting line at the depth of
+  cut (Strenkowski and Carroll, 1985, *J. Eng. Ind.* 107, 349-354; Shih,
+  Chandrasekar and Yang, 1990, the critical-distance form): the mesh is two
+  blocks, the uncut layer above the parting line and the base below, whose
+  nodes on the line are duplicated and tied in pairs (``explicit.step``'s
+  ``partner``: a pair moves as one node). A pair is released for good when
+  the tool's lowest point comes within ``separation`` (default half an
+  element) of it along the cut. Released, the pair's two segments (the
+  chip's underside and the machined surface) become part of the outline:
+  they are switched on in the master's mask, from a pool allocated at the
+  start (``Search.allocate(pool=...)``), so nothing recompiles.
+* **Contact**: one ``Search(self_contact=True, track=True,
+  normals="smooth")`` over one master: the tool's outline (body 0) and every
+  segment of the workpiece that can become outline (body 1). The slaves are
+  the workpiece's outline nodes. So the chip meets the tool's rake face, the
+  machined surface meets the edge and the flank, and the chip meets the
+  workpiece and itself as it curls, in one call. Forces: penalty with
+  Coulomb friction (``forces.coulomb``; the stick spring as stiff as the
+  penalty), on both sides: the reaction on the tool's nodes is the cutting
+  force, on the workpiece's own segments it pushes the other side back.
+  Penalty rather than Lagrange multipliers because an explicit step has no
+  system to solve; its stiffness (``stiffness`` times E per mm) keeps the
+  penetration a small fraction of an element, which the run reports.
+* **Time integration**: central differences (``sim.explicit``) at
+  ``safety`` times the stable step of the smallest element. Mass scaling:
+  the density times ``mass_scaling``, which lengthens the stable step by its
+  square root. It leaves the material's rate and heating alone (they follow
+  the real motion) and adds inertia: the chip's momentum flux, ``rho v² h``,
+  is about 1 % of the cutting force at the default scaling (measured against
+  a run at half the scaling by ``benchmarks/cutting.py``).
+* **Boundary conditions**: the base's bottom is fixed, the workpiece's left
+  end is held in x; the tool moves at ``-speed`` along x, its speed ramped up
+  over the first ``ramp`` of the travel.
+
+What it leaves out: heat conduction (in the workpiece and into the tool),
+the tool's elasticity and wear, damage and chip segmentation (AISI 1045 at
+these conditions forms a continuous chip), friction that depends on pressure
+or temperature (Coulomb's ``mu`` is constant), and the stress the parting
+line carries before it separates beyond the tie.
+
+Differentiable: ``mean_forces`` runs the whole cut as a function of the
+rake angle and ``mu``; ``jax.grad`` goes through the plastic flow (the
+return mapping's implicit gradient), the contact and the friction. Node
+separation is a discrete event: which step releases a pair does not move
+with the parameters, so the gradient is that of the run with its release
+steps held fixed (exact between releases, blind to a release moving a step).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import math
+import time
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jax import Array
+
+import jaxcontact
+from jaxcontact.forces import Friction, coulomb, penalty
+from jaxcontact.sim import explicit, machining, plasticity, solid
+
+STEEL = plasticity.JohnsonCook()
+CLEARANCE_DEG = 7.0
+MU = 0.3  # Coulomb's coefficient on the tool by default
+# Bulk viscosity (linear, quadratic): LS-DYNA's default linear coefficient;
+# no quadratic term, whose damping grows with the rate and would outrun the
+# fixed step.
+VISCOSITY = (0.06, 0.0)
+PENMAX = 0.25  # own contacts deeper than this many elements are not contacts
+ARC_SEGMENTS = 8
+
+
+@dataclasses.dataclass(frozen=True)
+class Cutting:
+    """The cut and its mesh: static (hashable) numbers; the rake angle and
+    ``mu`` are traced arguments of ``run`` and ``mean_forces``.
+
+    Attributes:
+      speed: cutting speed (m/min).
+      uncut: uncut chip thickness ``h`` (mm).
+      travel: how far the tool cuts (mm).
+      element: edge of the square elements (mm).
+      depth: the base's height below the parting line (mm).
+      edge_radius: the tool's cutting-edge radius (mm).
+      mass_scaling: the density's factor (1: none).
+      safety: the time step over the smallest element's stable step.
+      separation: the critical distance of node separation (mm; default a quarter element).
+      stiffness: the penalty and stick stiffness of node ``i``, in units of
+        ``m_i / dt^2`` (N/mm per mm of width, per mm of penetration): stable
+        in the explicit step below about 1 (about 0.5 E at the default on an
+        edge node).
+      ramp: share of the travel over which the tool's speed ramps up.
+      dtype: the float dtype of the run.
+    """
+
+    speed: float = 100.0
+    uncut: float = 0.10
+    travel: float = 0.6
+    element: float = 0.025
+    depth: float = 0.2
+    edge_radius: float = 0.002
+    mass_scaling: float = 400.0
+    safety: float = 0.3
+    separation: float | None = None
+    stiffness: float = 0.2
+    ramp: float = 0.05
+    erode: float = 0.1
+    shear_factor: float = 0.5
+    dtype: str = "float32"
+
+    # -- derived numbers -----------------------------------------------------
+
+    @property
+    def velocity(self) -> float:
+        """The tool's speed in mm/s."""
+        return self.speed * 1000.0 / 60.0
+
+    @property
+    def material(self) -> plasticity.JohnsonCook:
+        """AISI 1045 with its density scaled by ``mass_scaling`` for inertia
+        only: the specific heat is divided by it, so that the heat capacity per
+        volume, ``rho c``, and with it the adiabatic heating, are the steel's."""
+        return STEEL._replace(
+            density=STEEL.density * self.mass_scaling,
+            specific_heat=STEEL.specific_heat / self.mass_scaling,
+        )
+
+    @property
+    def columns(self) -> int:
+        """Elements along the workpiece: the travel and three uncut thicknesses more."""
+        return max(4, round((self.travel + 3 * self.uncut + 2 * self.element) / self.element))
+
+    @property
+    def chip_rows(self) -> int:
+        return max(1, round(self.uncut / self.element))
+
+    @property
+    def base_rows(self) -> int:
+        return max(1, round(self.depth / self.element))
+
+    @property
+    def dt(self) -> float:
+        """The time step (s): ``safety`` times the smallest element's stable step."""
+        m = self.material
+        wave = math.sqrt((m.bulk_modulus + 4 * m.shear_modulus / 3) / m.density)
+        return self.safety * self.element / wave
+
+    @property
+    def steps(self) -> int:
+        """Steps to cut ``travel`` with the ramp (the tool moves ``travel`` in all)."""
+        return math.ceil(self.travel / (self.velocity * self.dt) + self.ramp_steps / 2)
+
+    @property
+    def ramp_steps(self) -> int:
+        return max(1, round(self.ramp * self.travel / (self.velocity * self.dt)))
+
+    @property
+    def critical_distance(self) -> float:
+        return 0.25 * self.element if self.separation is None else self.separation
+
+    @property
+    def parting_y(self) -> float:
+        """The parting line's height above the workpiece's bottom (mm)."""
+        return self.base_rows * self.element
+
+    @property
+    def radius(self) -> float:
+        """The contact search radius (mm): half an element, beyond any penetration."""
+        return 0.5 * self.element
+
+
+class Workpiece(NamedTuple):
+    """The workpiece's mesh with everything a cutting run needs of it (static shapes)."""
+
+    quads: solid.Quads
+    partner: Array  # i32[N]  the tied node of each parting-line node (itself elsewhere)
+    base_line: Array  # i32[L]  base nodes on the parting line, left to right
+    chip_line: Array  # i32[L]  uncut-layer nodes on the parting line, left to right
+    top: Array  # i32[L]  the uncut layer's top surface, left to right
+    slaves: Array  # i32[S]  every node that can be on the outline
+    segments: Array  # i32[W, 2]  every segment that can be outline, counter-clockwise
+    pair: Array  # i32[W, 2]  parting-line pairs a segment needs released (-1: always real)
+    fixed: Array  # bool[N, 2]  prescribed (zero) velocity components
+    side: Array  # i32[N]  each node's side of the parting line: 0 the uncut layer, 1 the base
+    owner: Array  # i32[W]  the element each outline segment is an edge of
+
+
+def workpiece(cut: Cutting) -> Workpiece:
+    """The two-block mesh of ``cut``: the base, then the uncut layer, each a grid."""
+    nx, rows_b, rows_c = cut.columns, cut.base_rows, cut.chip_rows
+    e, dtype = cut.element, jnp.dtype(cut.dtype)
+    width = nx * e
+    base = solid.grid_mesh(width, rows_b * e, nx, rows_b, cut.material.density, dtype)
+    layer = solid.grid_mesh(width, rows_c * e, nx, rows_c, cut.material.density, dtype)
+    nb = (nx + 1) * (rows_b + 1)
+    nodes = np.concatenate(
+        [np.asarray(base.nodes), np.asarray(layer.nodes) + np.array([0.0, rows_b * e])]
+    )
+    quads = np.concatenate([np.asarray(base.quads), np.asarray(layer.quads) + nb])
+    mass = np.concatenate([np.asarray(base.mass), np.asarray(layer.mass)])
+    columns = np.arange(nx + 1)
+    base_line = rows_b * (nx + 1) + columns
+    # The starting edge chamfered under the parting line by a quarter element:
+    # the tool's edge meets the base first at the pair behind it, as it does
+    # every pair of the steady cut (the corner node, on the edge's lowest
+    # point, would be squeezed up the rake face with the chip).
+    nodes[base_line[-1], 1] -= 0.25 * e
+    chip_line = nb + columns
+    top = nb + rows_c * (nx + 1) + columns
+    partner = np.arange(len(nodes))
+    partner[base_line], partner[chip_line] = chip_line, base_line
+
+    def grid_b(i, j):
+        return j * (nx + 1) + i
+
+    def grid_c(i, j):
+        return nb + j * (nx + 1) + i
+
+    segments, pair = [], []
+
+    def add(a, b, pa=-1, pb=-1):
+        segments.append((a, b))
+        pair.append((pa, pb))
+
+    for j in range(rows_b):  # the base's right end, upwards
+        add(grid_b(nx, j), grid_b(nx, j + 1))
+    for i in range(nx, 0, -1):  # the machined surface, right to left (pool)
+        add(grid_b(i, rows_b), grid_b(i - 1, rows_b), i, i - 1)
+    for i in range(nx):  # the chip's underside, left to right (pool)
+        add(grid_c(i, 0), grid_c(i + 1, 0), i, i + 1)
+    for j in range(rows_c):  # the uncut layer's right end, upwards
+        add(grid_c(nx, j), grid_c(nx, j + 1))
+    for i in range(nx, 0, -1):  # the free surface, right to left
+        add(grid_c(i, rows_c), grid_c(i - 1, rows_c))
+    segments, pair = np.asarray(segments, np.int32), np.asarray(pair, np.int32)
+    slaves = np.unique(segments)
+    # The element each outline segment is an edge of (for erosion).
+    edges = {}
+    for element, corners in enumerate(quads):
+        for a, b in zip(corners, np.roll(corners, -1), strict=True):
+            edges[(int(a), int(b))] = element
+    owner = np.array([edges[(int(a), int(b))] for a, b in segments], np.int32)
+    fixed = np.zeros((len(nodes), 2), bool)
+    fixed[nodes[:, 1] == 0] = True
+    fixed[nodes[:, 0] == 0, 0] = True
+    return Workpiece(
+        solid.Quads(jnp.asarray(nodes, dtype), jnp.asarray(quads), jnp.asarray(mass, dtype)),
+        jnp.asarray(partner, jnp.int32),
+        jnp.asarray(base_line, jnp.int32),
+        jnp.asarray(chip_line, jnp.int32),
+        jnp.asarray(top, jnp.int32),
+        jnp.asarray(slaves, jnp.int32),
+        jnp.asarray(segments),
+        jnp.asarray(pair),
+        jnp.asarray(fixed),
+        jnp.asarray((np.arange(len(nodes)) < nb).astype(np.int32)),
+        jnp.asarray(owner),
+    )
+
+
+def tool_outline(lowest: Array, rake, edge_radius: float, dtype) -> Array:
+    """f[ARC_SEGMENTS + 4, 2]: the tool's outline, counter-clockwise, in ``jax.numpy``.
+
+    ``lowest`` (f[2]) is the lowest point of the cutting edge, ``rake`` the
+    rake angle (radians, traced: the outline is differentiable in it). The
+    edge is a circular arc of ``edge_radius`` tangent to the rake face
+    (leaning back by ``rake`` from the vertical, facing -x, the cutting
+    direction) and to the flank (7° clearance). The arc runs from the rake
+    face's outward normal (angle 180° - rake) past the lowest point (270°)
+    to the flank's (277°); then the flank's end, the back corner and the
+    rake face's top. Faces 0.6 mm long (rake) and 0.3 mm (flank).
+    """
+    rake = jnp.asarray(rake, dtype)
+    clearance = math.radians(CLEARANCE_DEG)
+    centre = lowest + jnp.asarray([0.0, edge_radius], dtype)
+    first = jnp.pi - rake
+    last = jnp.asarray(1.5 * math.pi + clearance, dtype)
+    angles = first + (last - first) * jnp.linspace(0.0, 1.0, ARC_SEGMENTS + 1, dtype=dtype)
+    arc = centre + edge_radius * jnp.stack([jnp.cos(angles), jnp.sin(angles)], -1)
+    flank_end = arc[-1] + 0.3 * jnp.asarray([math.cos(clearance), math.sin(clearance)], dtype)
+    rake_end = arc[0] + 0.6 * jnp.stack([jnp.sin(rake), jnp.cos(rake)])
+    back = jnp.stack([flank_end[0], rake_end[1]])
+    return jnp.concatenate([arc, jnp.stack([flank_end, back, rake_end])])
+
+
+TOOL_NODES = ARC_SEGMENTS + 4
+
+
+class State(NamedTuple):
+    """What the scan carries from step to step."""
+
+    body: explicit.Body
+    tool: jaxcontact.SearchState  # the search against the tool (with slip history)
+    own: jaxcontact.SearchState  # the search against the workpiece's own outline
+    friction: Friction  # Coulomb's state on the rake face and the flank
+    released: Array  # bool[L]  parting-line pairs separated
+    alive: Array  # bool[E]  elements not eroded
+    step: Array  # i32[]
+
+
+class Record(NamedTuple):
+    """What each step reports (one row per step after a scan)."""
+
+    force: Array  # f[2]  the force on the tool (N/mm): +x resists the cut (cutting), +y thrust
+    tool_depth: Array  # f[]  the deepest penetration of any node into the tool (mm)
+    own_depth: Array  # f[]  the deepest penetration of any node into the workpiece's outline (mm)
+    tool_contacts: Array  # i32[]  nodes pressed on the tool
+    own_contacts: Array  # i32[]  nodes pressed on the workpiece's own outline
+    released: Array  # i32[]  parting-line pairs separated
+    eroded: Array  # i32[]  elements eroded so far
+    dropped: Array  # i32[]  contacts on the own outline deeper than PENMAX, left out
+    overflow: Array  # bool[]  a search outgrew its sizes (never expected: exhaustive)
+
+
+@functools.partial(
+    jax.tree_util.register_dataclass,
+    data_fields=["mesh"],
+    meta_fields=["cut", "tool_search", "own_search", "start_x"],
+)
+@dataclasses.dataclass(frozen=True)
+class Model:
+    """A cut set up to run: the mesh (arrays), the cut and the searches (static)."""
+
+    cut: Cutting
+    mesh: Workpiece
+    tool_search: jaxcontact.Search
+    own_search: jaxcontact.Search
+    start_x: float  # the tool's lowest point at step 0 (x, mm)
+
+
+def tool_position(cut: Cutting, start_x: float, step) -> Array:
+    """The x of the tool's lowest point at ``step`` (the speed ramps up linearly)."""
+    k = jnp.asarray(step, jnp.dtype(cut.dtype))
+    ramp = cut.ramp_steps
+    moved = jnp.where(k < ramp, 0.5 * k * k / ramp, k - 0.5 * ramp)
+    return start_x - cut.velocity * cut.dt * moved
+
+
+# The edge's centre above the parting line, in edge radii, as the uncut
+# layer's nodes meet it (a radius below: the rake face reaches down to the
+# line) and as the base's nodes meet it (half a radius above: the line
+# passes under the edge's front, 30 degrees below its centre).
+CHIP_SIDE, BASE_SIDE = -1.0, 1.0
+
+
+def tool_surface(cut: Cutting, centre_x, rake) -> jaxcontact.Surface:
+    """The tool as two closed outlines, its edge's centre at ``centre_x``:
+    body 1 as the uncut layer meets it, body 0 as the base meets it
+    (``CHIP_SIDE``, ``BASE_SIDE``)."""
+    dtype = jnp.dtype(cut.dtype)
+    outlines = []
+    for side in (BASE_SIDE, CHIP_SIDE):
+        lowest_y = cut.parting_y + (side - 1) * cut.edge_radius
+        lowest = jnp.stack([jnp.asarray(centre_x, dtype), jnp.asarray(lowest_y, dtype)])
+        outlines.append(tool_outline(lowest, rake, cut.edge_radius, dtype))
+    starts = np.arange(TOOL_NODES)
+    ring = np.stack([starts, (starts + 1) % TOOL_NODES], -1).astype(np.int32)
+    return jaxcontact.Surface(
+        jnp.concatenate(outlines),
+        jnp.asarray(np.concatenate([ring, ring + TOOL_NODES])),
+        body=jnp.asarray(np.repeat(np.arange(2, dtype=np.int32), TOOL_NODES)),
+    )
+
+
+def own_surface(mesh: Workpiece, x: Array, released: Array, alive: Array) -> jaxcontact.Surface:
+    """The workpiece's outline now: every segment that can be outline, those
+    on the parting line real once both their pairs are released, none of an
+    eroded element."""
+    first, second = mesh.pair[:, 0], mesh.pair[:, 1]
+    real = (first < 0) | (released[jnp.maximum(first, 0)] & released[jnp.maximum(second, 0)])
+    return jaxcontact.Surface(x, mesh.segments, mask=real & alive[mesh.owner])
+
+
+def held(mesh: Workpiece, alive: Array) -> Array:
+    """bool[N]: nodes of at least one element not eroded (the others are debris)."""
+    count = jnp.zeros(mesh.quads.nodes.shape[0], jnp.int32)
+    return count.at[mesh.quads.quads].add(alive[:, None].astype(jnp.int32)) > 0
+
+
+def setup(cut: Cutting) -> tuple[Model, State]:
+    """The mesh, the searches and the state at rest, the tool just clear of the workpiece."""
+    mesh = workpiece(cut)
+    # Two searches, because a node at the edge touches the tool and the
+    # workpiece at once (the chip's underside meets the machined surface
+    # there), and a closest-point search gives each slave its one closest
+    # segment: one search per master gives each node its contact with each.
+    tool_search = jaxcontact.Search(
+        radius=cut.radius, method="exhaustive", track=True, normals="smooth"
+    )
+    own_search = jaxcontact.Search(radius=cut.radius, method="exhaustive", self_contact=True)
+    start_x = float(mesh.quads.nodes[:, 0].max()) + cut.edge_radius + 0.5 * cut.element
+    model = Model(cut, mesh, tool_search, own_search, start_x)
+    released = jnp.zeros(mesh.base_line.shape, bool).at[-2:].set(True)  # the chamfer
+    x = mesh.quads.nodes
+    slaves = x[mesh.slaves]
+    tool = tool_search.allocate(x, tool_surface(cut, start_x, 0.0), slave_body=mesh.side)
+    own = own_search.allocate(
+        slaves,
+        own_surface(mesh, x, released, jnp.ones(mesh.quads.quads.shape[0], bool)),
+        pool=mesh.pair[:, 0] >= 0,
+        slave_node=mesh.slaves,
+    )
+    body = explicit.at_rest(mesh.quads, cut.material)
+    friction = Friction.zeros(x.shape[0], x.dtype)
+    alive = jnp.ones(mesh.quads.quads.shape[0], bool)
+    start = State(body, tool, own, friction, released, alive, jnp.zeros((), jnp.int32))
+    return model, start
+
+
+def step(model: Model, state: State, rake, mu) -> tuple[State, Record]:
+    """One explicit step of the cut (``rake`` in radians, ``mu`` the friction coefficient)."""
+    cut, mesh = model.cut, model.mesh
+    dtype = jnp.dtype(cut.dtype)
+    x = state.body.x
+    lowest_x = tool_position(cut, model.start_x, state.step)
+    # Node separation: a pair lets go when the edge's front (on the parting
+    # line, an edge radius ahead of the lowest point) comes within the critical
+    # distance of where the pair started: the material ahead is pushed along
+    # with the tool, so its current place would keep ahead of the edge.
+    ahead = lowest_x - cut.edge_radius - mesh.quads.nodes[mesh.base_line, 0]
+    released = state.released | (ahead < cut.critical_distance)
+    slaves = x[mesh.slaves]
+    # Penalty stiffness from each node's mass and the step (LS-DYNA's "soft
+    # constraint" form): k = stiffness * m / dt^2 keeps the contact spring
+    # stable in the explicit step whatever the node's mass, and is about E
+    # per mm (independent of the mass scaling: m / dt^2 scales out).
+    k = cut.stiffness * mesh.quads.mass / cut.dt**2
+    # The tool: penalty and Coulomb friction from the slip history.
+    tool = tool_surface(cut, lowest_x, rake)
+    kept = held(mesh, state.alive)
+    on_tool, tool_state, slip = model.tool_search.closest(
+        state.tool, x, tool, mask=kept, slave_body=mesh.side
+    )
+    # Sticking and sliding (Zorev, 1963; the friction factor of Shirakashi and
+    # Usui, 1973): the friction stress is mu times the pressure, and never
+    # more than ``shear_factor`` times the steel's shear flow stress A / sqrt 3
+    # over the node's share of the face (an element): a cap on mu per node.
+    pressed = jnp.where(on_tool.active, k * -on_tool.gap, 0)
+    cap = cut.shear_factor * STEEL.A / math.sqrt(3) * cut.element
+    mu = jnp.where(pressed * mu > cap, cap / jnp.where(pressed > 0, pressed, 1), mu)
+    tool_forces, friction = coulomb(
+        on_tool, slip, state.friction, tool, stiffness=k, tangent_stiffness=k, mu=mu
+    )
+    # The workpiece against its own outline (the chip on the machined surface
+    # and on itself): frictionless penalty, the reaction on the outline's nodes.
+    own = own_surface(mesh, x, released, state.alive)
+    on_own, own_state = model.own_search.closest(
+        state.own, slaves, own, mask=kept[mesh.slaves], slave_node=mesh.slaves
+    )
+    # A node beyond the open end of the outline (the crack tip: the chip's
+    # underside and the machined surface end there) is not pressed on it:
+    # its closest point is that end, and the side it lies on is rounding.
+    ends = (
+        jnp.zeros(x.shape[0], jnp.int32).at[mesh.segments].add(own.mask[:, None].astype(jnp.int32))
+    )
+    open_end = (on_own.vertex >= 0) & (ends[jnp.maximum(on_own.vertex, 0)] == 1)
+    # Nor is a node found deeper than PENMAX elements "inside" its own
+    # workpiece (LS-DYNA's PENMAX): near the crack tip the outline is open, and
+    # a node of the base under the chip's root lies on the inner side of the
+    # chip's underside without being in the chip. Those are counted.
+    deep = on_own.active & (-on_own.gap > PENMAX * cut.element)
+    on_own = on_own._replace(active=on_own.active & ~open_end & ~deep)
+    own_forces = penalty(on_own, own, k[mesh.slaves])
+    external = (
+        tool_forces.on_slaves
+        + jnp.zeros_like(x).at[mesh.slaves].add(own_forces.on_slaves)
+        + own_forces.on_master
+    )
+    tied = ~released
+    partner = mesh.partner.at[mesh.base_line].set(jnp.where(tied, mesh.chip_line, mesh.base_line))
+    partner = partner.at[mesh.chip_line].set(jnp.where(tied, mesh.base_line, mesh.chip_line))
+    body, _ = explicit.step(
+        cut.material,
+        mesh.quads,
+        state.body,
+        external,
+        jnp.asarray(cut.dt, dtype),
+        fixed=mesh.fixed | ~kept[:, None],  # debris stops where it is
+        partner=partner,
+        alive=state.alive,
+        viscosity=VISCOSITY,
+    )
+    # Erosion: an element squeezed at a Gauss point to ``erode`` of its area
+    # is folding (it would turn inside out next): it is taken out, and counted.
+    alive = state.alive & (solid.distortion(mesh.quads, body.x) > cut.erode)
+    record = Record(
+        force=tool_forces.on_master.sum(0),
+        tool_depth=jnp.max(jnp.where(on_tool.active, -on_tool.gap, 0)),
+        own_depth=jnp.max(jnp.where(on_own.active, -on_own.gap, 0)),
+        tool_contacts=on_tool.active.sum(),
+        own_contacts=on_own.active.sum(),
+        released=released.sum(),
+        eroded=(~alive).sum(),
+        dropped=deep.sum(),
+        overflow=tool_state.overflow | own_state.overflow,
+    )
+    after = State(body, tool_state, own_state, friction, released, alive, state.step + 1)
+    return after, record
+
+
+def _scan(model: Model, state: State, rake, mu, steps: int):
+    def body(state, _):
+        return step(model, state, rake, mu)
+
+    return jax.lax.scan(body, state, None, length=steps)
+
+
+advance = jax.jit(_scan, static_argnums=4)
+advance.__doc__ = """``steps`` steps from ``state``: ``(state, Record of each step)`` (jitted)."""
+
+
+def mean_forces(model: Model, state: State, rake, mu, steps: int | None = None, last: float = 0.4):
+    """The mean force on the tool (f[2], N/mm) over the ``last`` share of a run of
+    ``steps`` steps (the whole cut by default) from ``state``: differentiable in
+    ``rake`` (radians) and ``mu``."""
+    steps = model.cut.steps if steps is None else steps
+    _, record = _scan(model, state, rake, mu, steps)
+    window = max(1, round(last * steps))
+    return record.force[-window:].mean(0)
+
+
+class Frame(NamedTuple):
+    """A snapshot of the run on the host (for pictures and checks)."""
+
+    step: int
+    x: np.ndarray  # f[N, 2]
+    plastic_strain: np.ndarray  # f[E, 4]
+    temperature: np.ndarray  # f[E, 4]  (K)
+    alive: np.ndarray  # bool[E]
+
+
+def run(cut: Cutting, rake_deg: float = 0.0, mu: float = MU, chunks: int = 40, progress=None):
+    """The whole cut, in ``chunks`` calls of one compiled program;
+    ``progress(done, total)`` is called after each. Returns ``(model, state,
+    record, frames, seconds)``: the ``Record`` of every step (NumPy), a
+    ``Frame`` at the start and after each chunk, and the seconds the chunks
+    took (compilation included in the first)."""
+    model, state = setup(cut)
+    per = math.ceil(cut.steps / chunks)
+    rake = jnp.asarray(math.radians(rake_deg), jnp.dtype(cut.dtype))
+    mu = jnp.asarray(mu, jnp.dtype(cut.dtype))
+
+    def frame(state):
+        points = state.body.points
+        return Frame(
+            int(state.step),
+            *jax.device_get((state.body.x, points.plastic_strain, points.temperature, state.alive)),
+        )
+
+    records, frames = [], [frame(state)]
+    started = time.perf_counter()
+    for done in range(per, per * chunks + 1, per):
+        state, record = advance(model, state, rake, mu, per)
+        records.append(jax.device_get(record))
+        frames.append(frame(state))
+        if progress is not None:
+            progress(done, per * chunks)
+    seconds = time.perf_counter() - started
+    record = jax.tree.map(lambda *parts: np.concatenate(parts), *records)
+    return model, state, record, frames, seconds
+
+
+# -- what a run measured ----------------------------------------------------
+
+
+def _inside(points: np.ndarray, polygon: np.ndarray) -> np.ndarray:
+    """bool[K]: points strictly inside a closed polygon (even-odd rule, on the host)."""
+    a, b = polygon, np.roll(polygon, -1, axis=0)
+    px, py = points[:, None, 0], points[:, None, 1]
+    crosses = (a[None, :, 1] > py) != (b[None, :, 1] > py)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        at = a[None, :, 0] + (py - a[None, :, 1]) * (b[None, :, 0] - a[None, :, 0]) / (
+            b[None, :, 1] - a[None, :, 1]
+        )
+    return (crosses & (px < at)).sum(axis=1) % 2 == 1
+
+
+def chip_thickness(model: Model, state: State) -> float:
+    """The steady chip's thickness (mm): the median distance from its free
+    surface's nodes to its underside (the released nodes of the parting line),
+    for the material cut in the later half of the run, more than two uncut
+    thicknesses behind the edge."""
+    cut, mesh = model.cut, model.mesh
+    x = np.asarray(state.body.x, np.float64)
+    reference = np.asarray(mesh.quads.nodes, np.float64)
+    kept = np.asarray(held(mesh, state.alive))
+    front = float(tool_position(cut, model.start_x, state.step)) - cut.edge_radius
+    underside = np.asarray(mesh.chip_line)[np.asarray(state.released)]
+    underside = underside[kept[underside]]
+    top = np.asarray(mesh.top)
+    start = front + 2 * cut.uncut
+    cut_at = reference[top, 0]
+    steady = top[(cut_at > start) & (cut_at < start + 0.5 * cut.travel) & kept[top]]
+    if len(steady) == 0 or len(underside) < 2:
+        return float("nan")
+    a, b = x[underside[:-1]], x[underside[1:]]
+    p = x[steady][:, None, :]
+    t = np.clip(np.sum((p - a) * (b - a), -1) / np.maximum(np.sum((b - a) ** 2, -1), 1e-30), 0, 1)
+    distance = np.linalg.norm(p - (a + t[..., None] * (b - a)), axis=-1).min(axis=1)
+    return float(np.median(distance))
+
+
+def _distance_to(points: np.ndarray, polygon: np.ndarray) -> np.ndarray:
+    """f[K]: each point's distance to a closed polygon's boundary."""
+    a, b = polygon, np.roll(polygon, -1, axis=0)
+    p = points[:, None, :]
+    t = np.sum((p - a) * (b - a), -1) / np.maximum(np.sum((b - a) ** 2, -1), 1e-30)
+    closest = a + np.clip(t, 0, 1)[..., None] * (b - a)
+    return np.linalg.norm(p - closest, axis=-1).min(axis=1)
+
+
+def deepest_in_tool(model: Model, rake_deg: float, frames) -> float:
+    """The deepest any workpiece node lies inside the tool (mm) over the
+    frames, by point-in-polygon on the host: the check that owes nothing to
+    the contact search. Each node is tested against the tool as its side
+    meets it (``CHIP_SIDE``, ``BASE_SIDE``)."""
+    cut, mesh = model.cut, model.mesh
+    side = np.asarray(mesh.side)
+    deepest = 0.0
+    for frame in frames:
+        surface = tool_surface(
+            cut, tool_position(cut, model.start_x, frame.step), math.radians(rake_deg)
+        )
+        nodes = np.asarray(surface.nodes, np.float64)
+        x = np.asarray(frame.x, np.float64)
+        kept = np.asarray(held(mesh, jnp.asarray(frame.alive)))
+        for label in (0, 1):
+            # Side 0 (the uncut layer) meets body 1's outline, side 1 body 0's.
+            outline = nodes[(1 - label) * TOOL_NODES : (2 - label) * TOOL_NODES]
+            points = x[kept & (side == label)]
+            inside = _inside(points, outline)
+            if inside.any():
+                deepest = max(deepest, float(_distance_to(points[inside], outline).max()))
+    return deepest
+
+
+def _steady_elements(model: Model, state: State) -> np.ndarray:
+    """bool[E]: the uncut layer's live elements cut in the steady part of the
+    run (the chip of the later half, more than two uncut thicknesses behind
+    the edge)."""
+    cut, mesh = model.cut, model.mesh
+    reference = np.asarray(mesh.quads.nodes, np.float64)[np.asarray(mesh.quads.quads)]
+    centre = reference.mean(axis=1)
+    front = float(tool_position(cut, model.start_x, state.step)) - cut.edge_radius
+    start = front + 2 * cut.uncut
+    layer = centre[:, 1] > cut.parting_y
+    window = (centre[:, 0] > start) & (centre[:, 0] < start + 0.5 * cut.travel)
+    return layer & window & np.asarray(state.alive)
+
+
+def summary(model: Model, state: State, record: Record, frames, seconds: float, rake_deg, mu):
+    """What the run measured, and the analyses set beside it (plain numbers).
+
+    Forces are the means over the last 40 % of the steps (N per mm of
+    width); the chip's thickness, strain and temperature are those of the
+    steady chip (``_steady_elements``); Merchant's shear stress is the
+    Johnson–Cook flow stress over sqrt 3 at the steady chip's median plastic
+    strain and temperature and the 90th percentile of the uncut layer's
+    plastic strain rate over the last frame (the primary shear zone's).
+    """
+    cut = model.cut
+    window = max(1, round(0.4 * len(record.force)))
+    cutting_force, thrust = (float(v) for v in np.mean(record.force[-window:], axis=0))
+    thickness = chip_thickness(model, state)
+    ratio = cut.uncut / thickness
+    phi = machining.shear_angle_from_chip(ratio, rake_deg)
+    beta = machining.friction_angle_from_forces(cutting_force, thrust, rake_deg)
+    steady = _steady_elements(model, state)
+    strain = np.asarray(state.body.points.plastic_strain, np.float64)[steady]
+    temperature = np.asarray(state.body.points.temperature, np.float64)[steady]
+    last, before = frames[-1], frames[-2]
+    elapsed = (last.step - before.step) * cut.dt
+    rates = (last.plastic_strain - before.plastic_strain).mean(axis=1) / elapsed
+    layer = np.asarray(model.mesh.quads.nodes)[np.asarray(model.mesh.quads.quads)].mean(1)[:, 1]
+    flowing = rates[(layer > cut.parting_y) & last.alive & (rates > 0)]
+    rate = float(np.percentile(flowing, 90)) if flowing.size else 1.0
+    eps, hot = float(np.median(strain)), float(np.median(temperature))
+    flow = float(plasticity.flow_stress(STEEL, eps, rate, hot))
+    tau = flow / math.sqrt(3)
+    merchant_fc, merchant_ft = machining.merchant_forces(tau, cut.uncut, 1.0, rake_deg, beta)
+    depth = max(
+        float(np.max(record.tool_depth)),
+        float(np.max(record.own_depth)),
+        deepest_in_tool(model, rake_deg, frames),
+    )
+    k_c11, m_c = machining.KIENZLE_CK45
+    return {
+        "material": "AISI 1045 (Johnson-Cook, Jaspers and Dautzenberg 2002)",
+        "cutting_speed_m_per_min": cut.speed,
+        "uncut_chip_thickness_mm": cut.uncut,
+        "rake_deg": float(rake_deg),
+        "friction": float(mu),
+        "friction_shear_factor": cut.shear_factor,
+        "cutting_force_N_per_mm": cutting_force,
+        "thrust_force_N_per_mm": thrust,
+        "chip_thickness_mm": thickness,
+        "chip_thickness_ratio": thickness / cut.uncut,
+        "shear_angle_deg": phi,
+        "friction_angle_deg": beta,
+        "max_penetration_over_element": depth / cut.element,
+        "nodes": int(model.mesh.quads.nodes.shape[0]),
+        "elements": int(model.mesh.quads.quads.shape[0]),
+        "eroded_elements": int(np.sum(~np.asarray(state.alive))),
+        "steps": int(state.step),
+        "time_step_s": cut.dt,
+        "mass_scaling": cut.mass_scaling,
+        "steps_per_second": int(state.step) / seconds,
+        "chip_plastic_strain": eps,
+        "chip_temperature_C": hot - 273.15,
+        "shear_zone_strain_rate_per_s": rate,
+        "merchant_shear_stress_MPa": tau,
+        "merchant_shear_angle_deg": machining.merchant_shear_angle(rake_deg, beta),
+        "merchant_cutting_force_N_per_mm": merchant_fc,
+        "merchant_thrust_force_N_per_mm": merchant_ft,
+        "kienzle_cutting_force_N_per_mm": machining.kienzle_force(cut.uncut),
+        "kienzle_band_N_per_mm": [
+            machining.kienzle_force(cut.uncut, constants=(1500.0, m_c)),
+            machining.kienzle_force(cut.uncut, constants=(k_c11, m_c)),
+        ],
+        "overflow": bool(np.any(record.overflow)),
+    }
+
+
+def _detect(model: Model, state: State, rake, steps: int):
+    """The step's two searches alone, ``steps`` times on ``state``'s
+    configuration nudged each time (so that no search is hoisted out of the loop)."""
+    cut, mesh = model.cut, model.mesh
+    x0 = state.body.x
+    kept = held(mesh, state.alive)
+    lowest_x = tool_position(cut, model.start_x, state.step)
+
+    def body(carry, k):
+        tool_state, own_state = carry
+        x = x0 + (k * 1e-9).astype(x0.dtype)
+        tool = tool_surface(cut, lowest_x, rake)
+        on_tool, tool_state, _ = model.tool_search.closest(
+            tool_state, x, tool, mask=kept, slave_body=mesh.side
+        )
+        own = own_surface(mesh, x, state.released, state.alive)
+        on_own, own_state = model.own_search.closest(
+            own_state, x[mesh.slaves], own, mask=kept[mesh.slaves], slave_node=mesh.slaves
+        )
+        return (tool_state, own_state), on_tool.gap.sum() + on_own.gap.sum()
+
+    ks = jnp.arange(steps, dtype=x0.dtype)
+    return jax.lax.scan(body, (state.tool, state.own), ks)
+
+
+_detect_jit = jax.jit(_detect, static_argnums=3)
+
+
+def detection_share(
+    model: Model, state: State, rake_deg: float, mu: float, steps: int = 400, repeats: int = 3
+) -> float:
+    """The share of a step spent in contact detection: the time of the two
+    searches alone over the time of whole steps, each ``steps`` long from
+    ``state`` (compiled first, then the median of ``repeats`` alternated runs)."""
+    dtype = jnp.dtype(model.cut.dtype)
+    rake = jnp.asarray(math.radians(rake_deg), dtype)
+    mu = jnp.asarray(mu, dtype)
+    jax.block_until_ready(advance(model, state, rake, mu, steps))
+    jax.block_until_ready(_detect_jit(model, state, rake, steps))
+    ratios = []
+    for _ in range(repeats):
+        started = time.perf_counter()
+        jax.block_until_ready(advance(model, state, rake, mu, steps))
+        whole = time.perf_counter() - started
+        started = time.perf_counter()
+        jax.block_until_ready(_detect_jit(model, state, rake, steps))
+        ratios.append((time.perf_counter() - started) / whole)
+    return float(np.median(ratios))
