@@ -82,14 +82,14 @@ def history_of(contact: Contact | ContactList, num_slaves: int) -> History:
         found = contact.found
         return History(
             segment=spread(jnp.where(found, contact.segment, -1), -1),
-            xi=spread(jax.lax.stop_gradient(jnp.where(found, contact.xi, 0)), 0),
+            xi=spread(jnp.where(found, contact.xi, 0), 0),
             found=spread(found, False),
             active=spread(contact.active, False),
         )
     found = contact.found
     return History(
         segment=jnp.where(found, contact.segment, -1),
-        xi=jax.lax.stop_gradient(jnp.where(found, contact.xi, 0)),
+        xi=jnp.where(found, contact.xi, 0),
         found=found,
         active=contact.active,
     )

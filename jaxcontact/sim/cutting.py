@@ -300,7 +300,7 @@ def tool_outline(lowest: Array, rake, edge_radius: float, dtype) -> Array:
     first = jnp.pi - rake
     last = jnp.asarray(1.5 * math.pi + clearance, dtype)
     angles = first + (last - first) * jnp.linspace(0.0, 1.0, ARC_SEGMENTS + 1, dtype=dtype)
-    arc = centre + edge_radius * jnp.stack([jnp.cos(angles), jnp.sin(angles)], -1)
+    arc = centre[None, :] + edge_radius * jnp.stack([jnp.cos(angles), jnp.sin(angles)], -1)
     flank_end = arc[-1] + 0.3 * jnp.asarray([math.cos(clearance), math.sin(clearance)], dtype)
     rake_end = arc[0] + 0.6 * jnp.stack([jnp.sin(rake), jnp.cos(rake)])
     back = jnp.stack([flank_end[0], rake_end[1]])

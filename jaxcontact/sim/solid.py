@@ -186,7 +186,8 @@ def internal_forces(
     ``pressure`` (f[E]) is added to each element's pressure (bulk viscosity)."""
     grad, det = _gradients(_corners(quads, x, alive))
     if pressure is not None:
-        stress = stress - pressure[:, None, None] * jnp.asarray([1.0, 1.0, 1.0, 0.0], stress.dtype)
+        volumetric = jnp.asarray([[[1.0, 1.0, 1.0, 0.0]]], stress.dtype)
+        stress = stress - pressure[:, None, None] * volumetric
     if alive is not None:
         stress = jnp.where(alive[:, None, None], stress, 0)
     sxx, syy, sxy = stress[..., 0], stress[..., 1], stress[..., 3]

@@ -1,0 +1,141 @@
+"""The orthogonal cutting simulation (``jaxcontact.sim.cutting``) on small meshes.
+
+A coarse cut (two element rows in the uncut layer) is enough to check what
+the simulation promises: a chip forms and leaves along the rake face, the
+parting line separates ahead of the edge, no workpiece node ends inside the
+tool (checked by point-in-polygon, apart from the contact search), the
+forces are finite and positive, and ``jax.grad`` of the mean cutting force
+with respect to the rake angle and the friction coefficient equals central
+finite differences of the whole run.
+"""
+
+from __future__ import annotations
+
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from jaxcontact.sim import cutting, explicit, solid
+
+# One coarse mesh for every test: 60 nodes, a few hundred steps per 0.05 mm.
+COARSE = dict(element=0.05, uncut=0.1, depth=0.1)
+
+
+@pytest.fixture(scope="module")
+def coarse_run():
+    cut = cutting.Cutting(travel=0.25, **COARSE)
+    model, state, record, frames, seconds = cutting.run(cut, 0.0, cutting.MU, chunks=5)
+    return cut, model, state, record, frames, seconds
+
+
+def test_a_chip_forms_and_rises_along_the_rake_face(coarse_run):
+    cut, model, state, record, frames, _ = coarse_run
+    assert np.isfinite(record.force).all()
+    assert not record.overflow.any()
+    # The parting line separated over the whole travel, pair by pair.
+    pairs = int(record.released[-1])
+    assert pairs >= round(cut.travel / cut.element)
+    assert np.all(np.diff(record.released) >= 0)
+    # The uncut layer's free surface rose above where it started, ahead of the tool.
+    top = np.asarray(model.mesh.top)
+    x = np.asarray(state.body.x)
+    original = cut.parting_y + cut.uncut
+    assert x[top, 1].max() > original + cut.uncut
+    # It did not tear apart: no element was eroded.
+    assert int(record.eroded[-1]) == 0
+    # The steady half of the cut pushes the tool back and up (N per mm of width).
+    late = record.force[len(record.force) // 2 :].mean(axis=0)
+    assert 50 < late[0] < 1000
+    assert 0 < late[1] < late[0]
+
+
+def test_no_node_ends_inside_the_tool(coarse_run):
+    cut, model, state, record, frames, _ = coarse_run
+    # Point-in-polygon on every frame, apart from the search: any node inside
+    # lies at most a small share of an element deep (the penalty's give).
+    assert cutting.deepest_in_tool(model, 0.0, frames) < 0.05 * cut.element
+    assert record.tool_depth.max() < 0.05 * cut.element
+    assert int(record.tool_contacts.max()) > 0
+
+
+def test_the_summary_has_the_keys_a_machinist_reads(coarse_run):
+    cut, model, state, record, frames, seconds = coarse_run
+    summary = cutting.summary(model, state, record, frames, seconds, 0.0, cutting.MU)
+    for key in (
+        "material",
+        "cutting_speed_m_per_min",
+        "uncut_chip_thickness_mm",
+        "rake_deg",
+        "friction",
+        "cutting_force_N_per_mm",
+        "thrust_force_N_per_mm",
+        "chip_thickness_ratio",
+        "shear_angle_deg",
+        "max_penetration_over_element",
+        "nodes",
+        "steps",
+        "steps_per_second",
+    ):
+        assert key in summary
+    assert summary["steps"] == int(state.step)
+    assert summary["chip_thickness_ratio"] > 1  # a chip is thicker than the layer it was
+    assert 0 < summary["shear_angle_deg"] < 45
+
+
+def test_tied_nodes_move_as_one_and_eroded_elements_carry_nothing():
+    steel = cutting.STEEL
+    quads = solid.grid_mesh(2.0, 1.0, 2, 1, steel.density, jnp.float32)
+    body = explicit.at_rest(quads, steel)
+    pushed = np.zeros((6, 2), np.float32)
+    pushed[0, 0], pushed[5, 1] = 5.0, -3.0  # different forces on nodes 0 and 5
+    partner = np.arange(6)
+    partner[0], partner[5] = 5, 0
+    dt = explicit.stable_dt(quads, steel)
+    # Nodes 0 and 5 start apart here: tied, they get one acceleration.
+    tied, _ = explicit.step(
+        steel, quads, body, jnp.asarray(pushed), dt, partner=jnp.asarray(partner)
+    )
+    velocity = np.asarray(tied.v)
+    np.testing.assert_array_equal(velocity[0], velocity[5])
+    assert np.abs(velocity[0]).max() > 0
+    # An eroded element's stress is no force.
+    stressed = body._replace(
+        points=body.points._replace(stress=jnp.ones_like(body.points.stress) * 100.0)
+    )
+    alive = jnp.asarray([False, True])
+    forces = solid.internal_forces(quads, body.x, stressed.points.stress, alive)
+    only_right = solid.internal_forces(
+        solid.Quads(quads.nodes, quads.quads[1:], quads.mass), body.x, stressed.points.stress[1:]
+    )
+    np.testing.assert_allclose(np.asarray(forces), np.asarray(only_right), atol=1e-4)
+
+
+@pytest.mark.x64
+def test_the_gradient_of_the_cutting_force_matches_finite_differences():
+    """``jax.grad`` of the mean cutting force through the whole run (plastic
+    flow, two searches, the slip history and Coulomb friction) against central
+    differences, at a rake of 5 degrees and mu = 0.3 where the run is smooth;
+    the release steps of node separation do not move for these changes."""
+    cut = cutting.Cutting(travel=0.05, dtype="float64", **COARSE)
+    model, state = cutting.setup(cut)
+
+    def force(rake, mu):
+        return cutting.mean_forces(model, state, rake, mu)[0]
+
+    value_and_grad = jax.jit(jax.value_and_grad(force, argnums=(0, 1)))
+    rake, mu = jnp.float64(math.radians(5.0)), jnp.float64(0.3)
+    value, (by_rake, by_mu) = value_and_grad(rake, mu)
+    assert 20 < float(value) < 1000
+    step = 1e-5
+
+    def difference(delta_rake, delta_mu):
+        above = value_and_grad(rake + delta_rake, mu + delta_mu)[0]
+        below = value_and_grad(rake - delta_rake, mu - delta_mu)[0]
+        return float(above - below) / (2 * step)
+
+    np.testing.assert_allclose(float(by_rake), difference(step, 0.0), rtol=5e-3)
+    np.testing.assert_allclose(float(by_mu), difference(0.0, step), rtol=5e-3)
+    assert float(by_mu) > 0  # more friction, more force
