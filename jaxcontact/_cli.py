@@ -1,10 +1,15 @@
 """The ``jaxcontact`` command line.
 
-``jaxcontact demo`` runs the ploughing simulation (``jaxcontact.sim.demo``);
-``jaxcontact demo --scene paper`` runs the source paper's scene (docs/scenes.md,
-Test 1) through both dense detectors, prints what they found and how long
-they took, and draws the scene near the tool tip. Each subcommand is one ``_<name>`` function
-registered in ``_parser``, so new ones (``bench``) slot in beside it.
+``jaxcontact demo`` runs the orthogonal cutting simulation
+(``jaxcontact.sim.cutting_demo``: a chip forms; it prints the summary and
+writes summary.json, chip.png, forces.png and chip.gif);
+``jaxcontact demo --scene ploughing`` runs the ploughing simulation
+(``jaxcontact.sim.demo``); ``jaxcontact demo --scene paper`` runs the source
+paper's scene (docs/scenes.md, Test 1) through both dense detectors, prints
+what they found and how long they took, and draws the scene near the tool
+tip. An option of one scene given with another is refused. Each subcommand
+is one ``_<name>`` function registered in ``_parser``, so new ones
+(``bench``) slot in beside it.
 """
 
 from __future__ import annotations
@@ -22,6 +27,7 @@ from jaxcontact.bench import add_arguments as add_bench_arguments
 from jaxcontact.bench import run_all as run_bench
 from jaxcontact.bench.timing import pinned_note, time_call
 from jaxcontact.scenes import paper_scene
+from jaxcontact.sim import cutting_demo as _cutting_demo
 from jaxcontact.sim import demo as _demo_sim
 
 # Drawn around the tool tip T = (50.9, 7): the rake and clearance faces, the
@@ -33,6 +39,8 @@ _PATH_STRIDE = 12
 
 
 def _demo(args: argparse.Namespace) -> int:
+    if args.scene == "cutting":
+        return _cutting_demo.main(args)
     if args.scene == "ploughing":
         return _demo_sim.main(args)
     if args.dtype == "float64":
@@ -147,29 +155,76 @@ def _positive_int(text: str) -> int:
     return value
 
 
+class _Options:
+    """An argument group that keeps the options added to it, for ``_check_demo``."""
+
+    def __init__(self, parser: argparse.ArgumentParser, title: str):
+        self.group = parser.add_argument_group(title)
+        self.actions: list[argparse.Action] = []
+
+    def add_argument(self, *names, **options) -> argparse.Action:
+        action = self.group.add_argument(*names, **options)
+        self.actions.append(action)
+        return action
+
+
+def _check_demo(parser: argparse.ArgumentParser, scenes: dict, args: argparse.Namespace) -> None:
+    """Refuses an option given for a scene that does not take it, and the
+    cutting scene's options that do not fit together (``parser.error``: exit 2)."""
+    for option, (dest, default, owners) in scenes.items():
+        if args.scene not in owners and getattr(args, dest) != default:
+            default = " (the default)" if args.scene == parser.get_default("scene") else ""
+            parser.error(
+                f"{option} is an option of --scene {' and '.join(owners)}, not of "
+                f"--scene {args.scene}{default}: add --scene {owners[0]}"
+            )
+    if args.scene == "cutting" and (problem := _cutting_demo.check(args)) is not None:
+        parser.error(problem)
+
+
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="jaxcontact", description="2D node-to-segment contact detection in JAX."
     )
     commands = parser.add_subparsers(dest="command", required=True)
     demo = commands.add_parser(
-        "demo", help="run the ploughing simulation (or --scene paper) and draw it"
+        "demo",
+        help="run the cutting simulation (or --scene ploughing, --scene paper) and draw it",
+        description="Runs a simulation or a scene and draws it: by default the orthogonal "
+        "cutting simulation (a chip forms), which prints its summary and writes summary.json, "
+        "chip.png, forces.png and chip.gif into --out. Each option below its scene's heading "
+        "belongs to that scene only.",
     )
     demo.add_argument(
         "--scene",
-        choices=("ploughing", "paper"),
-        default="ploughing",
-        help="ploughing: the simulation (default); paper: the paper's scene, Test 1",
+        choices=("cutting", "ploughing", "paper"),
+        default="cutting",
+        help="cutting: orthogonal cutting, a chip forms (default); ploughing: a tool ploughing "
+        "an elastic workpiece; paper: the paper's scene, Test 1",
     )
-    demo.add_argument("--out", default="jaxcontact-demo", help="folder for the PNGs")
-    demo.add_argument(
-        "--n", type=_positive_int, default=250, help="paper: (n+1)^2 nodes (default 250)"
-    )
-    _demo_sim.add_arguments(demo)
+    demo.add_argument("--out", default="jaxcontact-demo", help="folder for the files it writes")
     demo.add_argument(
         "--dtype", choices=("float32", "float64"), default="float32", help="default float32"
     )
-    demo.set_defaults(run=_demo)
+    # Taken by both simulations, with their own defaults.
+    demo.add_argument(
+        "--travel",
+        type=_cutting_demo.positive,
+        default=None,
+        help=f"cutting and ploughing: tool travel in mm (default {_cutting_demo.TRAVEL:g} "
+        f"cutting, {_demo_sim.TRAVEL:g} ploughing)",
+    )
+    cutting = _Options(demo, "cutting (--scene cutting, the default)")
+    _cutting_demo.add_arguments(cutting, shared=False)
+    ploughing = _Options(demo, "ploughing (--scene ploughing)")
+    _demo_sim.add_arguments(ploughing, travel=False)
+    paper = _Options(demo, "paper (--scene paper)")
+    paper.add_argument("--n", type=_positive_int, default=250, help="(n+1)^2 nodes (default 250)")
+    scenes = {"--travel": ("travel", None, ("cutting", "ploughing"))}
+    for name, options in (("cutting", cutting), ("ploughing", ploughing), ("paper", paper)):
+        for action in options.actions:
+            scenes[action.option_strings[0]] = (action.dest, action.default, (name,))
+    demo.set_defaults(run=_demo, check=functools.partial(_check_demo, demo, scenes))
     bench = commands.add_parser("bench", help="run the benchmarks; write CSV and PNG files")
     add_bench_arguments(bench)
     bench.set_defaults(run=run_bench)
@@ -179,6 +234,8 @@ def _parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     """Runs the command line; returns the exit status."""
     args = _parser().parse_args(argv)
+    if hasattr(args, "check"):
+        args.check(args)
     return args.run(args)
 
 

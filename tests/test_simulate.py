@@ -160,7 +160,8 @@ def test_demo_without_plots():
 
 
 def test_demo_command(tmp_path, capsys):
-    args = ["demo", "--nodes", "3000", "--travel", "0.2", "--repeats", "1", "--dtype", "float64"]
+    args = ["demo", "--scene", "ploughing", "--nodes", "3000", "--travel", "0.2", "--repeats", "1"]
+    args += ["--dtype", "float64"]
     assert _cli.main([*args, "--out", str(tmp_path)]) == 0
     printed = capsys.readouterr().out
     assert "steps/s" in printed and "detection share" in printed

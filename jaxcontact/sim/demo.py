@@ -1,4 +1,4 @@
-"""``jaxcontact demo``: the ploughing simulation run, timed and drawn.
+"""``jaxcontact demo --scene ploughing``: the ploughing simulation run, timed and drawn.
 
 Runs ``ploughing.simulate`` once for its results (growing the search sizes
 on overflow), then times it: the whole scan, and the same scan with
@@ -50,15 +50,25 @@ def _at_least(least: int, kind):
     return parse
 
 
-def add_arguments(parser: argparse.ArgumentParser) -> None:
-    """The simulation demo's options, on the ``demo`` subcommand."""
+TRAVEL = 0.5  # mm, the default tool travel
+
+
+def add_arguments(parser: argparse.ArgumentParser, travel: bool = True) -> None:
+    """The simulation demo's options, on the ``demo`` subcommand.
+
+    ``travel``: also ``--travel``, which ``jaxcontact demo`` owns itself (the
+    cutting scene takes it too, with another default).
+    """
     parser.add_argument(
         "--nodes",
         type=_at_least(4, int),
         default=10_000,
         help="workpiece nodes, about (default 10,000)",
     )
-    parser.add_argument("--travel", type=float, default=0.5, help="tool travel in mm (default 0.5)")
+    if travel:
+        parser.add_argument(
+            "--travel", type=float, default=TRAVEL, help=f"tool travel in mm (default {TRAVEL:g})"
+        )
     parser.add_argument(
         "--repeats",
         type=_at_least(1, int),
@@ -131,7 +141,8 @@ def main(args: argparse.Namespace) -> int:
     dtype = np.dtype(args.dtype)
     if dtype == np.float64:
         jax.config.update("jax_enable_x64", True)
-    summary, drawn = run_demo(args.nodes, args.travel, args.repeats, dtype)
+    travel = TRAVEL if args.travel is None else args.travel
+    summary, drawn = run_demo(args.nodes, travel, args.repeats, dtype)
     mesh, controls, config, final, history, timed, untimed = drawn
     material = config.material
     print(
@@ -141,7 +152,7 @@ def main(args: argparse.Namespace) -> int:
         f"(mass scaling); {args.dtype}"
     )
     print(
-        f"tool at {config.speed / 1e3:g} m/s, depth of cut 1 mm, travel {args.travel:g} mm: "
+        f"tool at {config.speed / 1e3:g} m/s, depth of cut 1 mm, travel {travel:g} mm: "
         f"{config.steps} steps of dt={config.dt:.3g} s; no material separation (the tool ploughs)"
     )
     print(f"jax {jax.__version__} on {jax.devices()[0].device_kind}; {pinned_note()}")

@@ -1,0 +1,504 @@
+"""``jaxcontact demo`` (``--scene cutting``, the default): the orthogonal cut, run and drawn.
+
+Runs ``cutting.run`` with a progress bar on stderr, times contact
+detection's share of a step (``cutting.detection_share``), prints the
+summary (``cutting.summary``) as a table and writes it to
+``OUT/summary.json``. With matplotlib installed (the ``bench`` extra) it
+also draws ``OUT/chip.png`` (the chip at the end, by plastic strain and by
+temperature), ``OUT/forces.png`` (the forces against the travel, beside
+Merchant's and Kienzle's) and ``OUT/chip.gif`` (the chip forming).
+
+The pictures are drawn in the tool's frame: x from the cutting edge's lowest
+point, y from the parting line (the depth of cut), both in mm.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import sys
+import time
+import warnings
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxcontact.sim import cutting
+
+TRAVEL = 0.6  # mm, the default tool travel
+RAKE_LIMIT = 30.0  # degrees either way
+# The picture's window around the tool (mm): left of the edge, right of it, below the line.
+_LEFT, _RIGHT, _BELOW = 0.5, 0.2, 0.1
+_STRAIN_MAX = 3.0  # the plastic strain colour scale's top
+FRAMES = 40  # the run in this many calls, a frame after each: the GIF's frames
+_BAR = 30  # characters of the progress bar
+_EDGES = (0.15, 0.15, 0.15, 0.5)  # the elements' edges: dark grey, half transparent
+
+
+def _number(least: float = 0.0, most: float | None = None, strict: bool = True):
+    """An argparse type: a finite float above ``least`` (or at least it), at most ``most``."""
+
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+        if not math.isfinite(value):
+            raise argparse.ArgumentTypeError(f"must be finite; got {text}")
+        if strict and not value > least:
+            raise argparse.ArgumentTypeError(f"must be more than {least:g}; got {value:g}")
+        if not strict and not value >= least:
+            raise argparse.ArgumentTypeError(f"must be at least {least:g}; got {value:g}")
+        if most is not None and not value <= most:
+            raise argparse.ArgumentTypeError(f"must be at most {most:g}; got {value:g}")
+        return value
+
+    return parse
+
+
+positive = _number()  # an argparse type: a finite float above 0
+
+
+def _whole(least: int):
+    """An argparse type: an integer at least ``least``."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"not a whole number: {text!r}") from None
+        if value < least:
+            raise argparse.ArgumentTypeError(f"must be at least {least}; got {value}")
+        return value
+
+    return parse
+
+
+_rake = _number(-RAKE_LIMIT, RAKE_LIMIT, strict=False)
+
+
+def add_arguments(parser, shared: bool = True) -> None:
+    """The cutting demo's options on ``parser`` (an ``ArgumentParser`` or a group).
+
+    ``shared``: also ``--travel``, ``--out`` and ``--dtype``, which the
+    ``jaxcontact demo`` command owns itself, as other scenes take them too.
+    """
+    parser.add_argument(
+        "--speed", type=positive, default=100.0, help="cutting speed in m/min (default 100)"
+    )
+    parser.add_argument(
+        "--uncut",
+        type=positive,
+        default=0.10,
+        help="uncut chip thickness h in mm, a whole number of elements (default 0.10)",
+    )
+    parser.add_argument(
+        "--rake",
+        type=_rake,
+        default=0.0,
+        help=f"rake angle in degrees, -{RAKE_LIMIT:g} to {RAKE_LIMIT:g} (default 0)",
+    )
+    parser.add_argument(
+        "--mu",
+        type=_number(0.0, strict=False),
+        default=cutting.MU,
+        help=f"Coulomb friction on the tool, 0 or more (default {cutting.MU:g})",
+    )
+    parser.add_argument(
+        "--element",
+        type=positive,
+        default=0.025,
+        help="element edge in mm (default 0.025)",
+    )
+    parser.add_argument(
+        "--fine", action="store_true", help="halve the element edge (about 8x longer)"
+    )
+    parser.add_argument(
+        "--mass-scaling",
+        type=positive,
+        default=400.0,
+        help="the density's factor (default 400; 1: none)",
+    )
+    parser.add_argument(
+        "--frames",
+        type=_whole(2),
+        default=FRAMES,
+        help=f"run the cut in this many chunks, a frame after each: chip.gif's "
+        f"({FRAMES + 1} of them at most; default {FRAMES})",
+    )
+    parser.add_argument("--no-pictures", action="store_true", help="write summary.json only")
+    parser.add_argument("--no-gif", action="store_true", help="leave out chip.gif")
+    if shared:
+        parser.add_argument(
+            "--travel",
+            type=positive,
+            default=TRAVEL,
+            help=f"tool travel in mm (default {TRAVEL:g})",
+        )
+        parser.add_argument("--out", default="jaxcontact-demo", help="folder for the files")
+        parser.add_argument(
+            "--dtype", choices=("float32", "float64"), default="float32", help="default float32"
+        )
+
+
+def element_size(args: argparse.Namespace) -> float:
+    """The element edge the options ask for (mm)."""
+    return args.element / 2 if args.fine else args.element
+
+
+def check(args: argparse.Namespace) -> str | None:
+    """What is wrong with the options together (``None``: nothing), for ``parser.error``."""
+    element = element_size(args)
+    rows = args.uncut / element
+    if round(rows) < 1 or abs(rows - round(rows)) > 1e-6 * max(1.0, rows):
+        return (
+            f"--uncut {args.uncut:g} mm must be a whole number of elements of "
+            f"{element:g} mm (--element{', halved by --fine' if args.fine else ''})"
+        )
+    return None
+
+
+def make_cut(args: argparse.Namespace) -> cutting.Cutting:
+    """The ``cutting.Cutting`` the options describe."""
+    travel = TRAVEL if getattr(args, "travel", None) is None else args.travel
+    return cutting.Cutting(
+        speed=args.speed,
+        uncut=args.uncut,
+        travel=travel,
+        element=element_size(args),
+        mass_scaling=args.mass_scaling,
+        dtype=getattr(args, "dtype", "float32"),
+    )
+
+
+class _Progress:
+    """A text progress bar on stderr, redrawn in place (``\\r``)."""
+
+    def __init__(self, stream=None):
+        self.stream = sys.stderr if stream is None else stream
+        self.started = time.perf_counter()
+        self.calls: list[tuple[int, float]] = []  # (steps done, when)
+
+    def __call__(self, done: int, total: int) -> None:
+        now = time.perf_counter()
+        if done > 0:
+            self.calls.append((done, now))
+        share = min(1.0, done / total) if total else 1.0
+        filled = round(share * _BAR)
+        elapsed = now - self.started
+        note = "  (compiling)" if done == 0 else ""
+        self.stream.write(
+            f"\r[{'#' * filled}{'.' * (_BAR - filled)}] {share:4.0%}  "
+            f"{done}/{total} steps  {elapsed:.0f} s{note}   "
+        )
+        if done >= total:
+            self.stream.write("\n")
+        self.stream.flush()
+
+    def rate(self) -> float:
+        """Steps per second after the first chunk (which compiles): NaN with one chunk."""
+        if len(self.calls) < 2:
+            return float("nan")
+        (first, since), (last, until) = self.calls[0], self.calls[-1]
+        return (last - first) / (until - since)
+
+
+def _plain(value):
+    """``value`` for JSON: NaN and infinities become ``None`` (null)."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, list | tuple):
+        return [_plain(v) for v in value]
+    return value
+
+
+def _shown(value) -> str:
+    if isinstance(value, bool) or value is None:
+        return str(value)
+    if isinstance(value, int):
+        return f"{value:,}"
+    if isinstance(value, float):
+        return "nan" if math.isnan(value) else f"{value:.4g}"
+    if isinstance(value, list | tuple):
+        return "[" + ", ".join(_shown(v) for v in value) + "]"
+    return str(value)
+
+
+def print_table(summary: dict, stream=None) -> None:
+    """The summary, one ``key  value`` a line, the values aligned."""
+    stream = sys.stdout if stream is None else stream
+    width = max(len(key) for key in summary)
+    for key, value in summary.items():
+        print(f"  {key:<{width}}  {_shown(value)}", file=stream)
+
+
+def _conditions(cut: cutting.Cutting, rake_deg: float, mu: float) -> str:
+    return f"v = {cut.speed:g} m/min, h = {cut.uncut:g} mm, rake {rake_deg:g}°, μ = {mu:g}"
+
+
+def main(args: argparse.Namespace) -> int:
+    """The ``demo`` subcommand for the cutting simulation; returns the exit status."""
+    problem = check(args)
+    if problem is not None:
+        print(f"jaxcontact demo: error: {problem}", file=sys.stderr)
+        return 2
+    cut = make_cut(args)
+    if cut.dtype == "float64":
+        jax.config.update("jax_enable_x64", True)
+    print(
+        f"cutting AISI 1045: {_conditions(cut, args.rake, args.mu)}, travel {cut.travel:g} mm, "
+        f"elements {cut.element:g} mm, mass scaling {cut.mass_scaling:g}, {cut.dtype}: "
+        f"{cut.steps:,} steps of dt = {cut.dt:.3g} s"
+    )
+    print(f"jax {jax.__version__} on {jax.devices()[0].device_kind}", flush=True)
+    chunk = math.ceil(cut.steps / args.frames)
+    progress = _Progress()
+    progress(0, chunk * args.frames)
+    model, state, record, frames, seconds = cutting.run(
+        cut, args.rake, args.mu, chunks=args.frames, progress=progress
+    )
+    print("timing contact detection's share of a step ...", file=sys.stderr, flush=True)
+    # A chunk's length: the scan compiled for the run is the one it times.
+    share = cutting.detection_share(model, state, args.rake, args.mu, steps=chunk)
+    with warnings.catch_warnings():
+        # A cut too short for a steady chip measures none: NaN, and NumPy's
+        # warnings about the empty means behind it.
+        warnings.simplefilter("ignore", RuntimeWarning)
+        summary = cutting.summary(model, state, record, frames, seconds, args.rake, args.mu)
+    summary.update(
+        steps_per_second_after_compile=progress.rate(),
+        detection_share=share,
+        travel_mm=cut.travel,
+        element_mm=cut.element,
+        dtype=cut.dtype,
+        run_seconds=seconds,
+    )
+    print_table(summary)
+    if not math.isfinite(summary["chip_thickness_mm"]):
+        print(
+            "  (no steady chip: the cut is too short to measure one; "
+            "chip, shear angle and Merchant's forces are nan)"
+        )
+    os.makedirs(args.out, exist_ok=True)
+    path = os.path.join(args.out, "summary.json")
+    with open(path, "w") as file:
+        json.dump({key: _plain(value) for key, value in summary.items()}, file, indent=2)
+        file.write("\n")
+    print(f"wrote {path}")
+    if args.no_pictures:
+        return 0
+    try:
+        import matplotlib
+    except ImportError:
+        print('pictures skipped: matplotlib is not installed (pip install "jaxcontact[bench]").')
+        return 0
+    matplotlib.use("Agg")  # headless: no display needed
+    drawn = [
+        draw_chip(model, frames[-1], args.rake, args.mu, os.path.join(args.out, "chip.png")),
+        draw_forces(model, record, summary, os.path.join(args.out, "forces.png")),
+    ]
+    if not args.no_gif:
+        drawn.append(
+            draw_gif(model, frames, args.rake, args.mu, os.path.join(args.out, "chip.gif"))
+        )
+    for path in drawn:
+        print(f"wrote {path} ({os.path.getsize(path) / 1e3:,.0f} kB)")
+    return 0
+
+
+# -- pictures ----------------------------------------------------------------
+
+
+def _origin(model, step: int) -> np.ndarray:
+    """The tool frame's origin at ``step``: the edge's lowest point's x, the parting line's y."""
+    x = float(cutting.tool_position(model.cut, model.start_x, step))
+    return np.array([x, model.cut.parting_y])
+
+
+def _tool(model, step: int, rake_deg: float) -> np.ndarray:
+    """f[K, 2]: the tool's outline at ``step``, in the tool frame."""
+    cut = model.cut
+    origin = _origin(model, step)
+    lowest = jnp.asarray([origin[0], cut.parting_y - cut.edge_radius], jnp.dtype(cut.dtype))
+    outline = cutting.tool_outline(lowest, math.radians(rake_deg), cut.edge_radius, cut.dtype)
+    return np.asarray(outline, np.float64) - origin
+
+
+def _elements(model, frame) -> tuple[np.ndarray, np.ndarray]:
+    """The live elements' corners in the tool frame (f[E', 4, 2]) and their indices."""
+    alive = np.flatnonzero(frame.alive)
+    quads = np.asarray(model.mesh.quads.quads)[alive]
+    corners = np.asarray(frame.x, np.float64)[quads] - _origin(model, frame.step)
+    return corners, alive
+
+
+def _top(corners: np.ndarray) -> float:
+    """The highest point of the elements inside the window's width (mm, tool frame)."""
+    x, y = corners[..., 0], corners[..., 1]
+    inside = (x > -_LEFT) & (x < _RIGHT)
+    return float(y[inside].max()) if inside.any() else 0.0
+
+
+def _window(axes, top: float) -> None:
+    axes.set(
+        xlim=(-_LEFT, _RIGHT),
+        ylim=(-_BELOW, top),
+        aspect="equal",
+        xlabel="x from the cutting edge (mm)",
+        ylabel="y from the parting line (mm)",
+    )
+
+
+def draw_chip(model, frame, rake_deg: float, mu: float, path: str) -> str:
+    """The chip at ``frame``: elements by plastic strain (left) and temperature (right)."""
+    import matplotlib.pyplot as plt
+    from matplotlib.collections import PolyCollection
+
+    cut = model.cut
+    corners, alive = _elements(model, frame)
+    top = _top(corners) + 0.05
+    tool = _tool(model, frame.step, rake_deg)
+    strain = np.asarray(frame.plastic_strain, np.float64)[alive].mean(axis=1)
+    celsius = np.asarray(frame.temperature, np.float64)[alive].mean(axis=1) - 273.15
+    height = 3.2 * (top + _BELOW) / (_LEFT + _RIGHT) + 1.6
+    figure, panels = plt.subplots(
+        1, 2, figsize=(12, max(3.5, height)), dpi=150, layout="constrained"
+    )
+    scales = (
+        (strain, "viridis", (0.0, _STRAIN_MAX), "equivalent plastic strain"),
+        (celsius, "inferno", (float(celsius.min()), float(celsius.max())), "temperature (°C)"),
+    )
+    for axes, (values, cmap, clim, label) in zip(panels, scales, strict=True):
+        shaded = PolyCollection(corners, array=values, cmap=cmap, edgecolors=_EDGES, linewidths=0.2)
+        shaded.set_clim(*clim)
+        axes.add_collection(shaded)
+        axes.fill(*tool.T, fc="0.7", ec="black", lw=0.8, zorder=3)
+        _window(axes, top)
+        axes.set_title(label)
+        figure.colorbar(shaded, ax=axes, label=label, shrink=0.9)
+    travel = float(model.start_x - cutting.tool_position(cut, model.start_x, frame.step))
+    figure.suptitle(
+        f"Orthogonal cutting of AISI 1045, {_conditions(cut, rake_deg, mu)}: "
+        f"after {travel:.2f} mm of travel ({frame.step:,} steps)"
+    )
+    figure.savefig(path)
+    plt.close(figure)
+    return path
+
+
+def _moving_average(values: np.ndarray, window: int) -> np.ndarray:
+    """The centred moving average of ``values`` over ``window`` samples (shorter at the ends)."""
+    kernel = np.ones(window)
+    total = np.convolve(values, kernel, mode="same")
+    count = np.convolve(np.ones_like(values), kernel, mode="same")
+    return total / count
+
+
+def draw_forces(model, record, summary: dict, path: str) -> str:
+    """The cutting and thrust forces against the travel, beside Merchant's and Kienzle's."""
+    import matplotlib.pyplot as plt
+
+    cut = model.cut
+    force = np.asarray(record.force, np.float64)
+    steps = len(force)
+    # Row k of the record is the step from k to k + 1.
+    travel = model.start_x - np.asarray(
+        cutting.tool_position(cut, model.start_x, np.arange(1, steps + 1)), np.float64
+    )
+    window = max(1, round(0.02 * steps))
+    averaged = max(1, round(0.4 * steps))
+    figure, axes = plt.subplots(figsize=(10, 4.8), dpi=150, layout="constrained")
+    axes.axvspan(
+        travel[-averaged],
+        travel[-1],
+        color="0.9",
+        zorder=0,
+        label="mean over the last 40 % of steps",
+    )
+    low, high = summary["kienzle_band_N_per_mm"]
+    axes.axhspan(low, high, color="tab:green", alpha=0.2, lw=0, label="Kienzle (Ck45)")
+    quantities = (
+        (0, "cutting force F_c", "tab:blue", "cutting_force_N_per_mm", "merchant_cutting_force"),
+        (1, "thrust force F_t", "tab:orange", "thrust_force_N_per_mm", "merchant_thrust_force"),
+    )
+    for column, name, colour, mean, merchant in quantities:
+        axes.plot(travel, force[:, column], c=colour, lw=0.5, alpha=0.3)
+        axes.plot(
+            travel,
+            _moving_average(force[:, column], window),
+            c=colour,
+            lw=1.5,
+            label=f"{name} (mean {summary[mean]:,.0f} N/mm)",
+        )
+        theory = summary[f"{merchant}_N_per_mm"]
+        if math.isfinite(theory):
+            axes.axhline(
+                theory,
+                c=colour,
+                ls="--",
+                lw=1.2,
+                label=f"Merchant's {name[-3:]} ({theory:,.0f} N/mm)",
+            )
+    axes.plot([], [], c="0.5", lw=0.5, alpha=0.6, label="raw (each step)")
+    axes.set(
+        xlabel="tool travel (mm)",
+        ylabel="force on the tool (N per mm of width)",
+        xlim=(0, travel[-1]),
+    )
+    axes.set_title(
+        f"{_conditions(cut, summary['rake_deg'], summary['friction'])}: the forces, "
+        f"averaged over {window} steps ({window / steps:.0%})"
+    )
+    axes.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
+    figure.savefig(path)
+    plt.close(figure)
+    return path
+
+
+def draw_gif(model, frames, rake_deg: float, mu: float, path: str) -> str:
+    """The chip forming, frame by frame, in a window that follows the tool."""
+    import matplotlib.pyplot as plt
+    from matplotlib.animation import PillowWriter
+    from matplotlib.collections import PolyCollection
+
+    cut = model.cut
+    if len(frames) > FRAMES + 1:
+        frames = [
+            frames[i] for i in np.linspace(0, len(frames) - 1, FRAMES + 1).round().astype(int)
+        ]
+    shown = [_elements(model, frame) for frame in frames]
+    top = max(_top(corners) for corners, _ in shown) + 0.05
+    figure, axes = plt.subplots(figsize=(6.4, 4.2), layout="constrained")
+    shaded = PolyCollection(
+        shown[0][0], array=np.zeros(len(shown[0][1])), cmap="viridis", edgecolors=_EDGES
+    )
+    shaded.set_linewidth(0.2)
+    shaded.set_clim(0.0, _STRAIN_MAX)
+    axes.add_collection(shaded)
+    (tool,) = axes.fill(*_tool(model, 0, rake_deg).T, fc="0.7", ec="black", lw=0.8, zorder=3)
+    _window(axes, top)
+    figure.colorbar(shaded, ax=axes, label="equivalent plastic strain", shrink=0.9)
+    title = axes.set_title("", fontsize=9)
+    writer = PillowWriter(fps=10)
+    with writer.saving(figure, path, dpi=80):
+        for frame, (corners, alive) in zip(frames, shown, strict=True):
+            shaded.set_verts(corners)
+            shaded.set_array(np.asarray(frame.plastic_strain, np.float64)[alive].mean(axis=1))
+            tool.set_xy(_tool(model, frame.step, rake_deg))
+            travel = float(model.start_x - cutting.tool_position(cut, model.start_x, frame.step))
+            title.set_text(f"{_conditions(cut, rake_deg, mu)}\ntravel {travel:.3f} mm")
+            writer.grab_frame()
+    plt.close(figure)
+    return path
+
+
+if __name__ == "__main__":
+    _parser = argparse.ArgumentParser(description="The orthogonal cutting demo, run and drawn.")
+    add_arguments(_parser)
+    _args = _parser.parse_args()
+    if (_problem := check(_args)) is not None:
+        _parser.error(_problem)
+    sys.exit(main(_args))

@@ -1,0 +1,147 @@
+"""``jaxcontact demo`` for the cutting simulation: its options, and one tiny cut end to end."""
+
+import argparse
+import json
+import math
+
+import pytest
+
+from jaxcontact import _cli
+from jaxcontact.sim import cutting, cutting_demo
+
+# What summary.json must hold (cutting.summary's keys and the demo's own).
+REQUIRED = {
+    "material",
+    "cutting_speed_m_per_min",
+    "uncut_chip_thickness_mm",
+    "rake_deg",
+    "friction",
+    "cutting_force_N_per_mm",
+    "thrust_force_N_per_mm",
+    "chip_thickness_ratio",
+    "shear_angle_deg",
+    "max_penetration_over_element",
+    "nodes",
+    "steps",
+    "steps_per_second",
+    "merchant_cutting_force_N_per_mm",
+    "merchant_thrust_force_N_per_mm",
+    "kienzle_cutting_force_N_per_mm",
+    "kienzle_band_N_per_mm",
+    "eroded_elements",
+    "detection_share",
+}
+
+
+def _demo_args(*argv: str) -> argparse.Namespace:
+    return _cli._parser().parse_args(["demo", *argv])
+
+
+def test_defaults_are_the_cutting_scene():
+    args = _demo_args()
+    assert args.scene == "cutting" and args.out == "jaxcontact-demo"
+    assert cutting_demo.check(args) is None
+    cut = cutting_demo.make_cut(args)
+    assert cut == cutting.Cutting(
+        speed=100.0, uncut=0.10, travel=0.6, element=0.025, mass_scaling=400.0, dtype="float32"
+    )
+    assert (args.rake, args.mu, args.frames) == (0.0, cutting.MU, 40)
+    assert not (args.fine or args.no_pictures or args.no_gif)
+
+
+def test_options_make_the_cut():
+    args = _demo_args(
+        "--speed", "200", "--uncut", "0.05", "--rake", "-30", "--mu", "0", "--element", "0.025",
+        "--fine", "--travel", "0.3", "--mass-scaling", "100", "--dtype", "float64",
+    )  # fmt: skip
+    cut = cutting_demo.make_cut(args)
+    assert (cut.speed, cut.uncut, cut.travel, cut.mass_scaling) == (200.0, 0.05, 0.3, 100.0)
+    assert cut.element == 0.0125 and cut.dtype == "float64"
+    assert (args.rake, args.mu) == (-30.0, 0.0)
+
+
+def test_standalone_parser_takes_the_shared_options():
+    parser = argparse.ArgumentParser()
+    cutting_demo.add_arguments(parser)
+    args = parser.parse_args(["--out", "there", "--no-gif"])
+    assert (args.travel, args.out, args.dtype, args.no_gif) == (0.6, "there", "float32", True)
+    assert cutting_demo.make_cut(args).travel == 0.6
+
+
+def test_other_scenes_keep_their_options():
+    args = _demo_args("--scene", "ploughing", "--nodes", "3000", "--travel", ".2", "--repeats", "1")
+    args.check(args)  # no error
+    assert (args.nodes, args.travel, args.repeats) == (3000, 0.2, 1)
+    args = _demo_args("--scene", "paper", "--n", "9", "--dtype", "float64")
+    args.check(args)
+    assert (args.n, args.dtype, args.travel) == (9, "float64", None)
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["--rake", "31"], "argument --rake: must be at most 30"),
+        (["--rake", "-30.5"], "argument --rake: must be at least -30"),
+        (["--speed", "0"], "argument --speed: must be more than 0"),
+        (["--speed", "-100"], "argument --speed: must be more than 0"),
+        (["--uncut", "nan"], "argument --uncut: must be finite"),
+        (["--element", "inf"], "argument --element: must be finite"),
+        (["--mass-scaling", "lots"], "argument --mass-scaling: not a number"),
+        (["--mu", "-0.1"], "argument --mu: must be at least 0"),
+        (["--travel", "0"], "argument --travel: must be more than 0"),
+        (["--frames", "1"], "argument --frames: must be at least 2"),
+        (["--uncut", "0.1", "--element", "0.03"], "--uncut 0.1 mm must be a whole number"),
+        (["--uncut", "0.01"], "--uncut 0.01 mm must be a whole number"),
+        (["--uncut", "0.1", "--element", "0.05", "--fine"], None),  # 0.025: fine
+        (["--nodes", "3000"], "--nodes is an option of --scene ploughing, not of --scene cutting"),
+        (["--scene", "ploughing", "--rake", "5"], "--rake is an option of --scene cutting"),
+        (["--scene", "paper", "--travel", "1"], "--travel is an option of --scene cutting and"),
+        (["--scene", "paper", "--nodes", "3000"], "--nodes is an option of --scene ploughing"),
+        (["--scene", "cutting", "--n", "9"], "--n is an option of --scene paper"),
+    ],
+)
+def test_bad_options_are_argparse_errors(argv, message, capsys):
+    if message is None:
+        args = _demo_args(*argv)
+        args.check(args)
+        assert cutting_demo.element_size(args) == 0.025
+        return
+    with pytest.raises(SystemExit) as exit_:
+        # Refused before anything runs: parsing and the scene's check.
+        _cli.main(["demo", *argv])
+    assert exit_.value.code == 2
+    err = capsys.readouterr().err
+    assert err.startswith("usage: jaxcontact demo") and message in err, err
+
+
+@pytest.mark.slow
+def test_tiny_cut_end_to_end(tmp_path, capsys, monkeypatch):
+    # 80 nodes, 616 steps, 0.05 mm of travel: too short for a steady chip
+    # (its thickness is null), long enough for the tool to cut 0.025 mm.
+    # Most of the time is compiling the step. The detection share would
+    # compile the searches' scan too: stood in for (it is cutting's to test).
+    timed = []
+
+    def detection_share(model, state, rake_deg, mu, steps):
+        timed.append(steps)
+        return 0.25
+
+    monkeypatch.setattr(cutting, "detection_share", detection_share)
+    argv = ["demo", "--travel", "0.05", "--element", "0.05", "--uncut", "0.1", "--frames", "4"]
+    assert _cli.main([*argv, "--out", str(tmp_path)]) == 0
+    steps = cutting.Cutting(travel=0.05, element=0.05).steps
+    assert timed == [math.ceil(steps / 4)]  # a chunk: the scan the run compiled
+    captured = capsys.readouterr()
+    assert "100%" in captured.err and "steps" in captured.err  # the progress bar
+    assert "cutting_force_N_per_mm" in captured.out and "detection_share" in captured.out
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert REQUIRED <= summary.keys()
+    assert summary["cutting_force_N_per_mm"] > 0
+    assert all(math.isfinite(summary[key]) for key in ("thrust_force_N_per_mm", "steps_per_second"))
+    assert summary["steps"] >= steps and summary["elements"] == 54
+    assert summary["detection_share"] == 0.25 and summary["overflow"] is False
+    low, high = summary["kienzle_band_N_per_mm"]
+    assert 0 < low < high
+    pytest.importorskip("matplotlib")
+    for name in ("chip.png", "forces.png", "chip.gif"):
+        assert (tmp_path / name).stat().st_size > 0, name
