@@ -78,6 +78,12 @@ SECTIONS = {
     ),
     "bodies": Section("Bodies, self-contact and a radius per slave", "bodies.py"),
     "friction": Section("Slip tracking, friction and smooth normals", "friction.py"),
+    "cutting": Section(
+        "Orthogonal cutting against Merchant and Kienzle",
+        "cutting.py",
+        ("--out", "{out}"),
+        "{out}/cutting.md",
+    ),
 }
 VERSIONED = (
     "jax",

@@ -81,7 +81,8 @@ def test_readme_simulation_snippet_runs():
     # The README's sizes (10,000 nodes, 0.5 mm of travel: 717 steps) cut down
     # so the snippet's every line still runs, gradient included, in seconds.
     section = README.read_text().split("## Simulation")[1].split("\n## ")[0]
-    (snippet,) = re.findall(r"```python\n(.*?)```", section, flags=re.S)
+    snippets = re.findall(r"```python\n(.*?)```", section, flags=re.S)
+    (snippet,) = [text for text in snippets if "ploughing(" in text]
     assert "ploughing(10_000, travel=0.5)" in snippet
     snippet = snippet.replace("ploughing(10_000, travel=0.5)", "ploughing(300, travel=0.1)")
     namespace: dict = {}
@@ -89,6 +90,21 @@ def test_readme_simulation_snippet_runs():
     history, grads = namespace["history"], namespace["grads"]
     assert float(history.force[:, 0].mean()) > 0  # the tool pushes the workpiece in -x
     assert all(bool(abs(value) > 0) for value in (grads.rake, grads.stiffness))
+
+
+def test_readme_cutting_snippet_runs():
+    # The snippet as written, its last line's gradient taken as a value: the
+    # same run's gradient is checked against finite differences in float64 by
+    # tests/test_cutting.py, and compiling it again in float32 here would
+    # double CI's longest compile.
+    section = README.read_text().split("### Orthogonal cutting")[1].split("\n### ")[0]
+    (snippet,) = re.findall(r"```python\n(.*?)```", section, flags=re.S)
+    last = "print(jax.grad(force, argnums=(0, 1))(math.radians(5.0), 0.3))"
+    assert last in snippet
+    snippet = snippet.replace(last, "value = force(math.radians(5.0), 0.3)")
+    namespace: dict = {}
+    exec(compile(snippet, str(README), "exec"), namespace)
+    assert 0 < float(namespace["value"]) < 1000  # N per mm: the tool pushes into the layer
 
 
 def test_readme_friction_snippet_runs():
