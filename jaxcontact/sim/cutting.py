@@ -3,9 +3,9 @@
 A rigid carbide tool (rake angle ``rake``, clearance 7°, edge radius
 ``edge_radius``) cuts a plane-strain AISI 1045 workpiece at the cutting speed
 ``speed`` with the uncut chip thickness ``uncut``. Everything runs in one
-``lax.scan`` of fixed shapes, on jaxcontact's public names only: a
-``jaxcontact.Search`` finds every contact, ``jaxcontact.forces.coulomb``
-turns it into forces. Units: mm, N, tonne, s, K (stresses in MPa, forces per
+``lax.scan`` of fixed shapes, on jaxcontact's public names only:
+``jaxcontact.Search`` finds every contact, ``jaxcontact.forces`` turns it
+into forces. Units: mm, N, tonne, s, K (stresses in MPa, forces per
 mm of width in N/mm).
 
 The model, and why:
@@ -24,39 +24,61 @@ The model, and why:
   blocks, the uncut layer above the parting line and the base below, whose
   nodes on the line are duplicated and tied in pairs (``explicit.step``'s
   ``partner``: a pair moves as one node). A pair is released for good when
-  the tool's lowest point comes within ``separation`` (default half an
-  element) of it along the cut. Released, the pair's two segments (the
-  chip's underside and the machined surface) become part of the outline:
-  they are switched on in the master's mask, from a pool allocated at the
-  start (``Search.allocate(pool=...)``), so nothing recompiles.
-* **Contact**: one ``Search(self_contact=True, track=True,
-  normals="smooth")`` over one master: the tool's outline (body 0) and every
-  segment of the workpiece that can become outline (body 1). The slaves are
-  the workpiece's outline nodes. So the chip meets the tool's rake face, the
-  machined surface meets the edge and the flank, and the chip meets the
-  workpiece and itself as it curls, in one call. Forces: penalty with
-  Coulomb friction (``forces.coulomb``; the stick spring as stiff as the
-  penalty), on both sides: the reaction on the tool's nodes is the cutting
-  force, on the workpiece's own segments it pushes the other side back.
+  the edge's front comes within ``separation`` (default a quarter element) of
+  where the pair started (the material ahead is pushed along with the tool,
+  so its current place would stay ahead). Released, the pair's two segments
+  (the chip's underside and the machined surface) become part of the
+  outline: they are switched on in the master's mask, from a pool allocated
+  at the start (``Search.allocate(pool=...)``), so nothing recompiles. The
+  workpiece's starting edge is chamfered a quarter element under the line.
+* **The stagnation point.** Node separation decides that material above the
+  line leaves with the chip and material below stays. A closest-point
+  contact with one rounded edge cannot hold that: a node at the edge's front
+  is pushed by a normal with no vertical part, and goes whichever way
+  rounding says (the base's corner climbed the rake face with the chip). So
+  the uncut layer's nodes meet the tool with its edge's centre a radius below
+  the line (the rake face reaches down to it), and the base's nodes meet it
+  with its lowest point on the line (``CHIP_SIDE``, ``BASE_SIDE``: two
+  outlines, 2 edge radii = 4 µm apart, told apart by ``Search``'s bodies).
+* **Contact**: two searches a step, because a node at the edge touches the
+  tool and the workpiece at once, and a closest-point search gives each
+  slave one segment. ``Search(track=True, normals="smooth")`` finds every
+  node's contact with the tool; ``forces.coulomb`` gives the penalty and the
+  friction from the slip history, its reaction on the tool's nodes the
+  cutting force. Friction is Coulomb's ``mu`` times the pressure, capped at
+  ``shear_factor`` times the steel's shear flow stress ``A / sqrt 3`` over a
+  node's share of the face (Zorev, 1963; Shirakashi and Usui, 1973):
+  without the cap, the sticking zone shears the chip's first row of elements
+  into slivers. ``Search(self_contact=True)`` over the pool of outline
+  segments finds the chip against the machined surface, the workpiece and
+  itself; ``forces.penalty`` acts on both sides, frictionless. Near the
+  crack tip the outline is open, and a node lies within the radius of the
+  other side's segments without being inside: contacts at an open end of
+  the outline, and contacts deeper than ``PENMAX`` elements (LS-DYNA's
+  PENMAX), are left out and counted (``Record.dropped``).
   Penalty rather than Lagrange multipliers because an explicit step has no
-  system to solve; its stiffness (``stiffness`` times E per mm) keeps the
-  penetration a small fraction of an element, which the run reports.
+  system to solve; each node's stiffness is ``stiffness * m_i / dt^2``
+  (LS-DYNA's soft constraint), stable in the step whatever the node's mass.
 * **Time integration**: central differences (``sim.explicit``) at
-  ``safety`` times the stable step of the smallest element. Mass scaling:
-  the density times ``mass_scaling``, which lengthens the stable step by its
-  square root. It leaves the material's rate and heating alone (they follow
-  the real motion) and adds inertia: the chip's momentum flux, ``rho v² h``,
-  is about 1 % of the cutting force at the default scaling (measured against
-  a run at half the scaling by ``benchmarks/cutting.py``).
+  ``safety`` (0.3) times the stable step of the smallest element, linear
+  bulk viscosity (0.06, LS-DYNA's default). Mass scaling: the density times
+  ``mass_scaling``, which lengthens the stable step by its square root; the
+  specific heat is divided by it, so heating is the steel's. The material's
+  rate follows the real motion; only inertia changes (measured against a run
+  at half the scaling by ``benchmarks/cutting.py``).
+* **Erosion**: an element whose Jacobian falls below ``erode`` of its
+  original at a Gauss point is taken out (no stress, its lone nodes held
+  still and out of contact), and counted. The default cut erodes none.
 * **Boundary conditions**: the base's bottom is fixed, the workpiece's left
   end is held in x; the tool moves at ``-speed`` along x, its speed ramped up
   over the first ``ramp`` of the travel.
 
 What it leaves out: heat conduction (in the workpiece and into the tool),
 the tool's elasticity and wear, damage and chip segmentation (AISI 1045 at
-these conditions forms a continuous chip), friction that depends on pressure
-or temperature (Coulomb's ``mu`` is constant), and the stress the parting
-line carries before it separates beyond the tie.
+these conditions forms a continuous chip), friction that depends on
+temperature, remeshing (the Lagrangian mesh limits how far a run can go:
+a sharp rake with high friction tears the machined surface into slivers),
+and the stress the parting line carries before it separates beyond the tie.
 
 Differentiable: ``mean_forces`` runs the whole cut as a function of the
 rake angle and ``mu``; ``jax.grad`` goes through the plastic flow (the
