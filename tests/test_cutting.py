@@ -64,22 +64,10 @@ def test_no_node_ends_inside_the_tool(coarse_run):
 def test_the_summary_has_the_keys_a_machinist_reads(coarse_run):
     cut, model, state, record, frames, seconds = coarse_run
     summary = cutting.summary(model, state, record, frames, seconds, 0.0, cutting.MU)
-    for key in (
-        "material",
-        "cutting_speed_m_per_min",
-        "uncut_chip_thickness_mm",
-        "rake_deg",
-        "friction",
-        "cutting_force_N_per_mm",
-        "thrust_force_N_per_mm",
-        "chip_thickness_ratio",
-        "shear_angle_deg",
-        "max_penetration_over_element",
-        "nodes",
-        "steps",
-        "steps_per_second",
-    ):
-        assert key in summary
+    # The keys the issue asks summary.json for (the demo adds detection_share).
+    from tests.test_cutting_demo import REQUIRED
+
+    assert REQUIRED - {"detection_share"} <= set(summary)
     assert summary["steps"] == int(state.step)
     assert summary["chip_thickness_ratio"] > 1  # a chip is thicker than the layer it was
     assert 0 < summary["shear_angle_deg"] < 45
