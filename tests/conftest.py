@@ -71,6 +71,27 @@ def _is_float64(value) -> bool:
     return isinstance(value, (type, np.dtype)) and np.dtype(value) == np.float64
 
 
+def pytest_configure(config):
+    # Under pytest-xdist, ``-n 2`` alone sends tests one by one to whichever
+    # worker is free (``--dist load``): both workers then run the same file
+    # at once, and each compiles the programs its tests share (module-level
+    # jits, cached allocations, scenes of one shape). Whole files per worker
+    # instead (``--dist loadfile``), in the order of collection below
+    # (``--no-loadscope-reorder``, else xdist puts the files with most tests
+    # first): on 2 cores, tests/test_bucket.py, test_search.py and
+    # test_compact.py together took 4 min 27 s instead of 7 min 12 s. A
+    # ``--dist`` given on the command line is kept.
+    if getattr(config.option, "dist", "no") != "load" or hasattr(config, "workerinput"):
+        return
+    if any(
+        arg in ("-d", "--distload") or arg.startswith("--dist")
+        for arg in config.invocation_params.args
+    ):
+        return
+    config.option.dist = "loadfile"
+    config.option.loadscopereorder = False
+
+
 @pytest.hookimpl(tryfirst=True)  # before -m reads the markers added here
 def pytest_collection_modifyitems(config, items):
     for item in items:

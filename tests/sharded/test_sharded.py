@@ -109,7 +109,10 @@ def test_overflow_on_one_device_is_overflow_of_the_whole(mesh):
 @pytest.mark.x64
 def test_tool_force_is_a_collective_sum_equal_to_one_device(mesh):
     scene = _scene(1_100, jnp.float64)
-    one = contact_forces(all_to_all(scene.x, scene.surface, radius=RADIUS), 1e3)[1]
+    # The contact test's mask and shapes: its sharded program, which CI's persistent
+    # compilation cache loads instead of compiling it again.
+    mask = jnp.asarray(np.arange(scene.x.shape[0]) % 7 != 3)
+    one = contact_forces(all_to_all(scene.x, scene.surface, radius=RADIUS, mask=mask), 1e3)[1]
 
     # Explicitly: inside shard_map, the reaction is a psum over the devices.
     def local(x, surface):
@@ -129,7 +132,7 @@ def test_tool_force_is_a_collective_sum_equal_to_one_device(mesh):
     np.testing.assert_allclose(explicit(x, scene.surface)[1], part, rtol=1e-12)
 
     # Implicitly: jit over a sharded result; XLA's partitioner adds the all-reduce.
-    contact = jax.jit(sharded(all_to_all, mesh))(scene.x, scene.surface, radius=RADIUS)
+    contact = jax.jit(sharded(all_to_all, mesh))(scene.x, scene.surface, radius=RADIUS, mask=mask)
     total = jax.jit(lambda c: contact_forces(c, 1e3)[1])(contact)
     np.testing.assert_allclose(total, one, rtol=1e-12)
 
