@@ -115,7 +115,8 @@ def main() -> None:
         key: half[key] / base[key] - 1
         for key in ("cutting_force_N_per_mm", "thrust_force_N_per_mm", "chip_thickness_ratio")
     }
-    text = f"""`python benchmarks/cutting.py` ({platform.processor() or platform.machine()}, float32; one
+    cpu = platform.processor() or platform.machine()
+    text = f"""`python benchmarks/cutting.py` ({cpu}, float32; one
 run of each; {time.strftime("%Y-%m-%d")}). Cut: 100 m/min, h = 0.10 mm, rake 0°, clearance 7°,
 edge radius 2 µm, mu = {cutting.MU} capped at half of A/sqrt 3 (Zorev's sticking zone), plane
 strain, {base["element_mm"] * 1000:.0f} µm elements (h/4), {default.travel} mm of travel.
