@@ -384,8 +384,8 @@ def tool_position(cut: Cutting, start_x: float, step) -> Array:
 
 # The edge's centre above the parting line, in edge radii, as the uncut
 # layer's nodes meet it (a radius below: the rake face reaches down to the
-# line) and as the base's nodes meet it (half a radius above: the line
-# passes under the edge's front, 30 degrees below its centre).
+# line) and as the base's nodes meet it (a radius above: the edge's lowest
+# point is on the line, which passes under the edge).
 CHIP_SIDE, BASE_SIDE = -1.0, 1.0
 
 
@@ -453,6 +453,22 @@ def setup(cut: Cutting) -> tuple[Model, State]:
     return model, start
 
 
+def _contacts(model: Model, tool_state, own_state, x, lowest_x, rake, released, alive, kept):
+    """A step's contact detection, the two searches: ``(tool, on_tool,
+    tool_state, slip, own, on_own, own_state)``, the surfaces with what each
+    search found and its state. ``step`` and ``detection_share`` both run this."""
+    mesh = model.mesh
+    tool = tool_surface(model.cut, lowest_x, rake)
+    on_tool, tool_state, slip = model.tool_search.closest(
+        tool_state, x, tool, mask=kept, slave_body=mesh.side
+    )
+    own = own_surface(mesh, x, released, alive)
+    on_own, own_state = model.own_search.closest(
+        own_state, x[mesh.slaves], own, mask=kept[mesh.slaves], slave_node=mesh.slaves
+    )
+    return tool, on_tool, tool_state, slip, own, on_own, own_state
+
+
 def step(model: Model, state: State, rake, mu) -> tuple[State, Record]:
     """One explicit step of the cut (``rake`` in radians, ``mu`` the friction coefficient)."""
     cut, mesh = model.cut, model.mesh
@@ -465,18 +481,16 @@ def step(model: Model, state: State, rake, mu) -> tuple[State, Record]:
     # with the tool, so its current place would keep ahead of the edge.
     ahead = lowest_x - cut.edge_radius - mesh.quads.nodes[mesh.base_line, 0]
     released = state.released | (ahead < cut.critical_distance)
-    slaves = x[mesh.slaves]
     # Penalty stiffness from each node's mass and the step (LS-DYNA's "soft
     # constraint" form): k = stiffness * m / dt^2 keeps the contact spring
     # stable in the explicit step whatever the node's mass, and is about E
     # per mm (independent of the mass scaling: m / dt^2 scales out).
     k = cut.stiffness * mesh.quads.mass / cut.dt**2
-    # The tool: penalty and Coulomb friction from the slip history.
-    tool = tool_surface(cut, lowest_x, rake)
     kept = held(mesh, state.alive)
-    on_tool, tool_state, slip = model.tool_search.closest(
-        state.tool, x, tool, mask=kept, slave_body=mesh.side
+    tool, on_tool, tool_state, slip, own, on_own, own_state = _contacts(
+        model, state.tool, state.own, x, lowest_x, rake, released, state.alive, kept
     )
+    # The tool: penalty and Coulomb friction from the slip history.
     # Sticking and sliding (Zorev, 1963; the friction factor of Shirakashi and
     # Usui, 1973): the friction stress is mu times the pressure, and never
     # more than ``shear_factor`` times the steel's shear flow stress A / sqrt 3
@@ -489,10 +503,6 @@ def step(model: Model, state: State, rake, mu) -> tuple[State, Record]:
     )
     # The workpiece against its own outline (the chip on the machined surface
     # and on itself): frictionless penalty, the reaction on the outline's nodes.
-    own = own_surface(mesh, x, released, state.alive)
-    on_own, own_state = model.own_search.closest(
-        state.own, slaves, own, mask=kept[mesh.slaves], slave_node=mesh.slaves
-    )
     # A node beyond the open end of the outline (the crack tip: the chip's
     # underside and the machined surface end there) is not pressed on it:
     # its closest point is that end, and the side it lies on is rounding.
@@ -639,16 +649,16 @@ def chip_thickness(model: Model, state: State) -> float:
     steady = top[(cut_at > start) & (cut_at < start + 0.5 * cut.travel) & kept[top]]
     if len(steady) == 0 or len(underside) < 2:
         return float("nan")
-    a, b = x[underside[:-1]], x[underside[1:]]
-    p = x[steady][:, None, :]
-    t = np.clip(np.sum((p - a) * (b - a), -1) / np.maximum(np.sum((b - a) ** 2, -1), 1e-30), 0, 1)
-    distance = np.linalg.norm(p - (a + t[..., None] * (b - a)), axis=-1).min(axis=1)
-    return float(np.median(distance))
+    return float(np.median(_distance_to(x[steady], x[underside], closed=False)))
 
 
-def _distance_to(points: np.ndarray, polygon: np.ndarray) -> np.ndarray:
-    """f[K]: each point's distance to a closed polygon's boundary."""
-    a, b = polygon, np.roll(polygon, -1, axis=0)
+def _distance_to(points: np.ndarray, polygon: np.ndarray, closed: bool = True) -> np.ndarray:
+    """f[K]: each point's distance to a polygon's boundary (a closed one, or an
+    open polyline with ``closed=False``)."""
+    if closed:
+        a, b = polygon, np.roll(polygon, -1, axis=0)
+    else:
+        a, b = polygon[:-1], polygon[1:]
     p = points[:, None, :]
     t = np.sum((p - a) * (b - a), -1) / np.maximum(np.sum((b - a) ** 2, -1), 1e-30)
     closest = a + np.clip(t, 0, 1)[..., None] * (b - a)
@@ -770,21 +780,14 @@ def summary(model: Model, state: State, record: Record, frames, seconds: float, 
 def _detect(model: Model, state: State, rake, steps: int):
     """The step's two searches alone, ``steps`` times on ``state``'s
     configuration nudged each time (so that no search is hoisted out of the loop)."""
-    cut, mesh = model.cut, model.mesh
     x0 = state.body.x
-    kept = held(mesh, state.alive)
-    lowest_x = tool_position(cut, model.start_x, state.step)
+    kept = held(model.mesh, state.alive)
+    lowest_x = tool_position(model.cut, model.start_x, state.step)
 
     def body(carry, k):
-        tool_state, own_state = carry
         x = x0 + (k * 1e-9).astype(x0.dtype)
-        tool = tool_surface(cut, lowest_x, rake)
-        on_tool, tool_state, _ = model.tool_search.closest(
-            tool_state, x, tool, mask=kept, slave_body=mesh.side
-        )
-        own = own_surface(mesh, x, state.released, state.alive)
-        on_own, own_state = model.own_search.closest(
-            own_state, x[mesh.slaves], own, mask=kept[mesh.slaves], slave_node=mesh.slaves
+        _, on_tool, tool_state, _, _, on_own, own_state = _contacts(
+            model, *carry, x, lowest_x, rake, state.released, state.alive, kept
         )
         return (tool_state, own_state), on_tool.gap.sum() + on_own.gap.sum()
 

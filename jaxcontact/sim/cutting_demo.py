@@ -28,7 +28,8 @@ import numpy as np
 
 from jaxcontact.sim import cutting
 
-TRAVEL = 0.6  # mm, the default tool travel
+_DEFAULT = cutting.Cutting()  # the default cut: the options' defaults are its numbers
+TRAVEL = _DEFAULT.travel  # mm, the default tool travel
 RAKE_LIMIT = 30.0  # degrees either way
 # The picture's window around the tool (mm): left of the edge, right of it, below the line.
 _LEFT, _RIGHT, _BELOW = 0.5, 0.2, 0.1
@@ -87,13 +88,17 @@ def add_arguments(parser, shared: bool = True) -> None:
     ``jaxcontact demo`` command owns itself, as other scenes take them too.
     """
     parser.add_argument(
-        "--speed", type=positive, default=100.0, help="cutting speed in m/min (default 100)"
+        "--speed",
+        type=positive,
+        default=_DEFAULT.speed,
+        help=f"cutting speed in m/min (default {_DEFAULT.speed:g})",
     )
     parser.add_argument(
         "--uncut",
         type=positive,
-        default=0.10,
-        help="uncut chip thickness h in mm, a whole number of elements (default 0.10)",
+        default=_DEFAULT.uncut,
+        help=f"uncut chip thickness h in mm, a whole number of elements "
+        f"(default {_DEFAULT.uncut:.2f})",
     )
     parser.add_argument(
         "--rake",
@@ -110,8 +115,8 @@ def add_arguments(parser, shared: bool = True) -> None:
     parser.add_argument(
         "--element",
         type=positive,
-        default=0.025,
-        help="element edge in mm (default 0.025)",
+        default=_DEFAULT.element,
+        help=f"element edge in mm (default {_DEFAULT.element:g})",
     )
     parser.add_argument(
         "--fine", action="store_true", help="halve the element edge (about 8x longer)"
@@ -119,8 +124,8 @@ def add_arguments(parser, shared: bool = True) -> None:
     parser.add_argument(
         "--mass-scaling",
         type=positive,
-        default=400.0,
-        help="the density's factor (default 400; 1: none)",
+        default=_DEFAULT.mass_scaling,
+        help=f"the density's factor (default {_DEFAULT.mass_scaling:g}; 1: none)",
     )
     parser.add_argument(
         "--frames",
@@ -140,7 +145,10 @@ def add_arguments(parser, shared: bool = True) -> None:
         )
         parser.add_argument("--out", default="jaxcontact-demo", help="folder for the files")
         parser.add_argument(
-            "--dtype", choices=("float32", "float64"), default="float32", help="default float32"
+            "--dtype",
+            choices=("float32", "float64"),
+            default=_DEFAULT.dtype,
+            help=f"default {_DEFAULT.dtype}",
         )
 
 
@@ -170,7 +178,7 @@ def make_cut(args: argparse.Namespace) -> cutting.Cutting:
         travel=travel,
         element=element_size(args),
         mass_scaling=args.mass_scaling,
-        dtype=getattr(args, "dtype", "float32"),
+        dtype=getattr(args, "dtype", _DEFAULT.dtype),
     )
 
 
