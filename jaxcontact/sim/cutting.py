@@ -136,6 +136,16 @@ class Cutting:
         in the explicit step below about 1 (about 0.5 E at the default on an
         edge node).
       ramp: share of the travel over which the tool's speed ramps up.
+      erode: the Jacobian ratio below which an element is eroded.
+      shear_factor: the friction cap, in units of the steel's shear flow stress ``A / sqrt 3``.
+      rake_face: the rake face's length (mm): a chip longer than it climbs
+        over the tool's top.
+      breaker: ``(land, angle, length)``: a chip breaker's backwall, the
+        rake face ``land`` mm long, then a wall ``length`` mm long turned
+        ``angle`` degrees from the rake face towards the chip (the chip is
+        bent away from the face); None: a plain rake face of ``rake_face``.
+      ahead: the uncut length left ahead of the tool at the end (mm;
+        default three uncut thicknesses): room for a curled chip to land.
       dtype: the float dtype of the run.
     """
 
@@ -152,6 +162,9 @@ class Cutting:
     ramp: float = 0.05
     erode: float = 0.1
     shear_factor: float = 0.5
+    rake_face: float = 0.6
+    breaker: tuple[float, float, float] | None = None
+    ahead: float | None = None
     dtype: str = "float32"
 
     # -- derived numbers -----------------------------------------------------
@@ -173,8 +186,9 @@ class Cutting:
 
     @property
     def columns(self) -> int:
-        """Elements along the workpiece: the travel and three uncut thicknesses more."""
-        return max(4, round((self.travel + 3 * self.uncut + 2 * self.element) / self.element))
+        """Elements along the workpiece: the travel and ``ahead`` (three uncut thicknesses) more."""
+        ahead = 3 * self.uncut if self.ahead is None else self.ahead
+        return max(4, round((self.travel + ahead + 2 * self.element) / self.element))
 
     @property
     def chip_rows(self) -> int:
@@ -304,7 +318,9 @@ def workpiece(cut: Cutting) -> Workpiece:
     )
 
 
-def tool_outline(lowest: Array, rake, edge_radius: float, dtype) -> Array:
+def tool_outline(
+    lowest: Array, rake, edge_radius: float, dtype, rake_face: float = 0.6, breaker=None
+) -> Array:
     """f[ARC_SEGMENTS + 4, 2]: the tool's outline, counter-clockwise, in ``jax.numpy``.
 
     ``lowest`` (f[2]) is the lowest point of the cutting edge, ``rake`` the
@@ -314,7 +330,7 @@ def tool_outline(lowest: Array, rake, edge_radius: float, dtype) -> Array:
     direction) and to the flank (7° clearance). The arc runs from the rake
     face's outward normal (angle 180° - rake) past the lowest point (270°)
     to the flank's (277°); then the flank's end, the back corner and the
-    rake face's top. Faces 0.6 mm long (rake) and 0.3 mm (flank).
+    rake face's top. Faces ``rake_face`` mm long (rake, 0.6 by default) and 0.3 mm (flank).
     """
     rake = jnp.asarray(rake, dtype)
     clearance = math.radians(CLEARANCE_DEG)
@@ -324,7 +340,22 @@ def tool_outline(lowest: Array, rake, edge_radius: float, dtype) -> Array:
     angles = first + (last - first) * jnp.linspace(0.0, 1.0, ARC_SEGMENTS + 1, dtype=dtype)
     arc = centre[None, :] + edge_radius * jnp.stack([jnp.cos(angles), jnp.sin(angles)], -1)
     flank_end = arc[-1] + 0.3 * jnp.asarray([math.cos(clearance), math.sin(clearance)], dtype)
-    rake_end = arc[0] + 0.6 * jnp.stack([jnp.sin(rake), jnp.cos(rake)])
+    up = jnp.stack([jnp.sin(rake), jnp.cos(rake)])  # along the rake face, away from the edge
+    if breaker is not None:
+        # A chip breaker's backwall: the land, then a wall turned towards the
+        # chip (-x); the outline goes from the flank's end straight to the
+        # wall's end (the same node count: the back corner is left out).
+        land, angle, length = breaker
+        land_end = arc[0] + land * up
+        turn = math.radians(angle)
+        wall = jnp.stack(
+            [
+                up[0] * math.cos(turn) - up[1] * math.sin(turn),
+                up[0] * math.sin(turn) + up[1] * math.cos(turn),
+            ]
+        )
+        return jnp.concatenate([arc, jnp.stack([flank_end, land_end + length * wall, land_end])])
+    rake_end = arc[0] + rake_face * up
     back = jnp.stack([flank_end[0], rake_end[1]])
     return jnp.concatenate([arc, jnp.stack([flank_end, back, rake_end])])
 
@@ -398,7 +429,9 @@ def tool_surface(cut: Cutting, centre_x, rake) -> jaxcontact.Surface:
     for side in (BASE_SIDE, CHIP_SIDE):
         lowest_y = cut.parting_y + (side - 1) * cut.edge_radius
         lowest = jnp.stack([jnp.asarray(centre_x, dtype), jnp.asarray(lowest_y, dtype)])
-        outlines.append(tool_outline(lowest, rake, cut.edge_radius, dtype))
+        outlines.append(
+            tool_outline(lowest, rake, cut.edge_radius, dtype, cut.rake_face, cut.breaker)
+        )
     starts = np.arange(TOOL_NODES)
     ring = np.stack([starts, (starts + 1) % TOOL_NODES], -1).astype(np.int32)
     return jaxcontact.Surface(

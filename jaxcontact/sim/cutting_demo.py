@@ -331,7 +331,9 @@ def _tool(model, step: int, rake_deg: float) -> np.ndarray:
     cut = model.cut
     origin = _origin(model, step)
     lowest = jnp.asarray([origin[0], cut.parting_y - cut.edge_radius], jnp.dtype(cut.dtype))
-    outline = cutting.tool_outline(lowest, math.radians(rake_deg), cut.edge_radius, cut.dtype)
+    outline = cutting.tool_outline(
+        lowest, math.radians(rake_deg), cut.edge_radius, cut.dtype, cut.rake_face, cut.breaker
+    )
     return np.asarray(outline, np.float64) - origin
 
 
