@@ -12,6 +12,7 @@ finite differences of the whole run.
 from __future__ import annotations
 
 import math
+import re
 
 import jax
 import jax.numpy as jnp
@@ -50,6 +51,64 @@ def test_a_chip_forms_and_rises_along_the_rake_face(coarse_run):
     late = record.force[len(record.force) // 2 :].mean(axis=0)
     assert 50 < late[0] < 1000
     assert 0 < late[1] < late[0]
+
+
+def test_the_chip_root_on_the_machined_surface_is_no_landing(coarse_run):
+    # The chip's underside meets the machined surface at the crack tip: own
+    # contacts there, never counted as the chip landing, which it does not
+    # do in a quarter millimetre (benchmarks/chip_curl.py: at about 3 mm,
+    # with a chip breaker).
+    cut, model, state, record, frames, seconds = coarse_run
+    assert int(record.own_contacts.max()) > 0
+    assert int(record.landed.max()) == 0
+    summary = cutting.summary(model, state, record, frames, seconds, 0.0, cutting.MU)
+    assert summary["chip_lands_at_travel_mm"] is None
+    assert summary["chip_landing_contacts_max"] == 0
+
+
+def test_a_chip_breaker_turns_the_rake_face_towards_the_chip():
+    lowest = jnp.asarray([0.0, 0.0])
+    radius, (land, angle, length) = 0.002, (0.25, 30.0, 0.5)
+    plain = np.asarray(cutting.tool_outline(lowest, 0.0, radius, jnp.float32))
+    broken = np.asarray(
+        cutting.tool_outline(lowest, 0.0, radius, jnp.float32, breaker=(land, angle, length))
+    )
+    assert broken.shape == plain.shape == (cutting.TOOL_NODES, 2)
+    np.testing.assert_array_equal(broken[: cutting.ARC_SEGMENTS + 2], plain[:-2])
+    # The land runs up the rake face (x of the face, land long), then the wall
+    # turns `angle` towards the chip (-x) and runs `length`.
+    face_x = plain[0, 0]
+    wall_end, land_end = broken[-2], broken[-1]
+    np.testing.assert_allclose(land_end, [face_x, plain[0, 1] + land], atol=1e-6)
+    wall = wall_end - land_end
+    np.testing.assert_allclose(np.linalg.norm(wall), length, rtol=1e-6)
+    np.testing.assert_allclose(math.degrees(math.atan2(-wall[0], wall[1])), angle, rtol=1e-5)
+    # Counter-clockwise, as every outline (positive signed area).
+    x, y = broken[:, 0], broken[:, 1]
+    assert 0.5 * np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y) > 0
+    # A longer rake face only moves its top.
+    longer = np.asarray(cutting.tool_outline(lowest, 0.0, radius, jnp.float32, rake_face=3.0))
+    np.testing.assert_allclose(longer[-1, 1] - plain[-1, 1], 2.4, rtol=1e-6)
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        (dict(breaker=(0.25, 95.0, 0.5)), "0 < angle < 90"),
+        (dict(breaker=(0.001, 30.0, 0.5)), "land > the edge radius"),
+        (dict(breaker=(0.25, 30.0)), "Cutting.breaker must be None or (land"),
+        (dict(rake_face=0.0), "Cutting.rake_face must be > 0"),
+        (dict(ahead=-1.0), "Cutting.ahead must be >= 0"),
+    ],
+)
+def test_bad_tool_geometry_is_refused(change, message):
+    with pytest.raises(ValueError, match=re.escape(message)):
+        cutting.Cutting(**change)
+
+
+def test_room_ahead_lengthens_the_workpiece():
+    assert cutting.Cutting().columns == cutting.Cutting(ahead=0.3).columns
+    assert cutting.Cutting(ahead=1.5).columns == cutting.Cutting().columns + 48
 
 
 def test_no_node_ends_inside_the_tool(coarse_run):

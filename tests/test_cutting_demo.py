@@ -60,11 +60,25 @@ def test_options_make_the_cut():
     assert (args.rake, args.mu) == (-30.0, 0.0)
 
 
+def test_curl_is_the_chip_breaker_cut_unless_told_otherwise():
+    cut = cutting_demo.make_cut(_demo_args("--curl"))
+    want = cutting_demo.CURL
+    assert cut.breaker == want["breaker"] and cut.ahead == want["ahead"]
+    assert (cut.element, cut.travel) == (want["element"], want["travel"])
+    # What is given is kept; the breaker and the room ahead stay.
+    cut = cutting_demo.make_cut(_demo_args("--curl", "--travel", "1", "--element", "0.025"))
+    assert (cut.element, cut.travel, cut.breaker) == (0.025, 1.0, want["breaker"])
+    assert cutting_demo.make_cut(_demo_args("--curl", "--fine")).element == want["element"] / 2
+    # Only the cutting scene takes it.
+    with pytest.raises(SystemExit):
+        _cli.main(["demo", "--scene", "paper", "--curl"])
+
+
 def test_standalone_parser_takes_the_shared_options():
     parser = argparse.ArgumentParser()
     cutting_demo.add_arguments(parser)
     args = parser.parse_args(["--out", "there", "--no-gif"])
-    assert (args.travel, args.out, args.dtype, args.no_gif) == (0.6, "there", "float32", True)
+    assert (args.travel, args.out, args.dtype, args.no_gif) == (None, "there", "float32", True)
     assert cutting_demo.make_cut(args).travel == 0.6
 
 

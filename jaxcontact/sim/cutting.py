@@ -113,6 +113,10 @@ MU = 0.3  # Coulomb's coefficient on the tool by default
 # fixed step.
 VISCOSITY = (0.06, 0.0)
 PENMAX = 0.25  # own contacts deeper than this many elements are not contacts
+# An own contact farther than this many uncut thicknesses from the edge's
+# lowest point is the chip landing on the workpiece or on itself (nearer, it
+# is the chip's root on the machined surface at the crack tip).
+LANDING = 2.0
 ARC_SEGMENTS = 8
 
 
@@ -166,6 +170,27 @@ class Cutting:
     breaker: tuple[float, float, float] | None = None
     ahead: float | None = None
     dtype: str = "float32"
+
+    def __post_init__(self):
+        if not self.rake_face > 0:
+            raise ValueError(f"Cutting.rake_face must be > 0 mm; got {self.rake_face!r}")
+        if self.ahead is not None and not self.ahead >= 0:
+            raise ValueError(f"Cutting.ahead must be >= 0 mm or None; got {self.ahead!r}")
+        if self.breaker is not None:
+            try:
+                land, angle, length = (float(v) for v in self.breaker)
+            except (TypeError, ValueError):
+                raise ValueError(
+                    "Cutting.breaker must be None or (land mm, angle degrees, length mm); "
+                    f"got {self.breaker!r}"
+                ) from None
+            if not (land > self.edge_radius and 0 < angle < 90 and length > 0):
+                raise ValueError(
+                    f"Cutting.breaker (land, angle, length) needs land > the edge radius "
+                    f"({self.edge_radius:g} mm), 0 < angle < 90 degrees and length > 0; "
+                    f"got {self.breaker!r}"
+                )
+            object.__setattr__(self, "breaker", (land, angle, length))
 
     # -- derived numbers -----------------------------------------------------
 
@@ -386,6 +411,7 @@ class Record(NamedTuple):
     released: Array  # i32[]  parting-line pairs separated
     eroded: Array  # i32[]  elements eroded so far
     dropped: Array  # i32[]  contacts on the own outline deeper than PENMAX, left out
+    landed: Array  # i32[]  own contacts farther than LANDING uncut thicknesses from the edge
     overflow: Array  # bool[]  a search outgrew its sizes (never expected: exhaustive)
 
 
@@ -550,6 +576,11 @@ def step(model: Model, state: State, rake, mu) -> tuple[State, Record]:
     deep = on_own.active & (-on_own.gap > PENMAX * cut.element)
     on_own = on_own._replace(active=on_own.active & ~open_end & ~deep)
     own_forces = penalty(on_own, own, k[mesh.slaves])
+    # The chip landed (on the workpiece ahead of the tool, or on itself): an
+    # own contact away from the edge, where the crack's faces meet.
+    edge = jnp.stack([lowest_x, jnp.asarray(cut.parting_y, dtype)])
+    away = jnp.sum((x[mesh.slaves] - edge[None, :]) ** 2, -1) > (LANDING * cut.uncut) ** 2
+    landed = jax.lax.stop_gradient(on_own.active & away).sum()
     external = (
         tool_forces.on_slaves
         + jnp.zeros_like(x).at[mesh.slaves].add(own_forces.on_slaves)
@@ -581,6 +612,7 @@ def step(model: Model, state: State, rake, mu) -> tuple[State, Record]:
         released=released.sum(),
         eroded=(~alive).sum(),
         dropped=deep.sum(),
+        landed=landed,
         overflow=tool_state.overflow | own_state.overflow,
     )
     after = State(body, tool_state, own_state, friction, released, alive, state.step + 1)
@@ -773,6 +805,12 @@ def summary(model: Model, state: State, record: Record, frames, seconds: float, 
         deepest_in_tool(model, rake_deg, frames),
     )
     k_c11, m_c = machining.KIENZLE_CK45
+    landed = np.flatnonzero(np.asarray(record.landed) > 0)
+    lands_at = (
+        model.start_x - float(tool_position(cut, model.start_x, int(landed[0])))
+        if landed.size
+        else None
+    )
     return {
         "material": "AISI 1045 (Johnson-Cook, Jaspers and Dautzenberg 2002)",
         "cutting_speed_m_per_min": cut.speed,
@@ -790,6 +828,10 @@ def summary(model: Model, state: State, record: Record, frames, seconds: float, 
         "nodes": int(model.mesh.quads.nodes.shape[0]),
         "elements": int(model.mesh.quads.quads.shape[0]),
         "eroded_elements": int(np.sum(~np.asarray(state.alive))),
+        # The travel (mm) at which the chip first touched the workpiece or
+        # itself away from the edge (None: it did not), and how many nodes at most.
+        "chip_lands_at_travel_mm": lands_at,
+        "chip_landing_contacts_max": int(np.max(record.landed, initial=0)),
         "steps": int(state.step),
         "time_step_s": cut.dt,
         "mass_scaling": cut.mass_scaling,

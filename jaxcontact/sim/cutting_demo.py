@@ -34,6 +34,10 @@ RAKE_LIMIT = 30.0  # degrees either way
 # The picture's window around the tool (mm): left of the edge, right of it, below the line.
 _LEFT, _RIGHT, _BELOW = 0.5, 0.2, 0.1
 _STRAIN_MAX = 3.0  # the plastic strain colour scale's top
+# The chip-breaker cut of ``--curl`` (the smallest clean landing the curl study
+# found, benchmarks/cutting.py --curl): a backwall (land, angle°, length, mm),
+# 2 elements through h, the travel, and the uncut length left ahead (mm).
+CURL = {"breaker": (0.25, 30.0, 0.5), "element": 0.05, "travel": 3.2, "ahead": 1.5}
 FRAMES = 40  # the run in this many calls, a frame after each: the GIF's frames
 _BAR = 30  # characters of the progress bar
 _EDGES = (0.15, 0.15, 0.15, 0.5)  # the elements' edges: dark grey, half transparent
@@ -115,8 +119,8 @@ def add_arguments(parser, shared: bool = True) -> None:
     parser.add_argument(
         "--element",
         type=positive,
-        default=_DEFAULT.element,
-        help=f"element edge in mm (default {_DEFAULT.element:g})",
+        default=None,
+        help=f"element edge in mm (default {_DEFAULT.element:g}; {CURL['element']:g} with --curl)",
     )
     parser.add_argument(
         "--fine", action="store_true", help="halve the element edge (about 8x longer)"
@@ -134,14 +138,22 @@ def add_arguments(parser, shared: bool = True) -> None:
         help=f"run the cut in this many chunks, a frame after each: chip.gif's "
         f"({FRAMES + 1} of them at most; default {FRAMES})",
     )
+    parser.add_argument(
+        "--curl",
+        action="store_true",
+        help=f"the chip-breaker cut: a backwall {CURL['breaker'][0]:g} mm up the rake face, "
+        f"turned {CURL['breaker'][1]:g}° towards the chip, curls the chip onto the workpiece "
+        f"ahead; elements {CURL['element']:g} mm and travel {CURL['travel']:g} mm unless "
+        "given (about 2 min on 2 cores)",
+    )
     parser.add_argument("--no-pictures", action="store_true", help="write summary.json only")
     parser.add_argument("--no-gif", action="store_true", help="leave out chip.gif")
     if shared:
         parser.add_argument(
             "--travel",
             type=positive,
-            default=TRAVEL,
-            help=f"tool travel in mm (default {TRAVEL:g})",
+            default=None,
+            help=f"tool travel in mm (default {TRAVEL:g}; {CURL['travel']:g} with --curl)",
         )
         parser.add_argument("--out", default="jaxcontact-demo", help="folder for the files")
         parser.add_argument(
@@ -154,7 +166,10 @@ def add_arguments(parser, shared: bool = True) -> None:
 
 def element_size(args: argparse.Namespace) -> float:
     """The element edge the options ask for (mm)."""
-    return args.element / 2 if args.fine else args.element
+    element = args.element
+    if element is None:
+        element = CURL["element"] if getattr(args, "curl", False) else _DEFAULT.element
+    return element / 2 if args.fine else element
 
 
 def check(args: argparse.Namespace) -> str | None:
@@ -171,13 +186,18 @@ def check(args: argparse.Namespace) -> str | None:
 
 def make_cut(args: argparse.Namespace) -> cutting.Cutting:
     """The ``cutting.Cutting`` the options describe."""
-    travel = TRAVEL if getattr(args, "travel", None) is None else args.travel
+    curl = getattr(args, "curl", False)
+    travel = getattr(args, "travel", None)
+    if travel is None:
+        travel = CURL["travel"] if curl else TRAVEL
     return cutting.Cutting(
         speed=args.speed,
         uncut=args.uncut,
         travel=travel,
         element=element_size(args),
         mass_scaling=args.mass_scaling,
+        breaker=CURL["breaker"] if curl else None,
+        ahead=CURL["ahead"] if curl else None,
         dtype=getattr(args, "dtype", _DEFAULT.dtype),
     )
 
@@ -345,16 +365,22 @@ def _elements(model, frame) -> tuple[np.ndarray, np.ndarray]:
     return corners, alive
 
 
-def _top(corners: np.ndarray) -> float:
+def _left(model) -> float:
+    """How far the picture reaches left of the edge (mm): farther for a chip
+    breaker's cut, whose chip curls over the uncut workpiece ahead."""
+    return 1.6 if model.cut.breaker is not None else _LEFT
+
+
+def _top(corners: np.ndarray, left: float) -> float:
     """The highest point of the elements inside the window's width (mm, tool frame)."""
     x, y = corners[..., 0], corners[..., 1]
-    inside = (x > -_LEFT) & (x < _RIGHT)
+    inside = (x > -left) & (x < _RIGHT)
     return float(y[inside].max()) if inside.any() else 0.0
 
 
-def _window(axes, top: float) -> None:
+def _window(axes, top: float, left: float) -> None:
     axes.set(
-        xlim=(-_LEFT, _RIGHT),
+        xlim=(-left, _RIGHT),
         ylim=(-_BELOW, top),
         aspect="equal",
         xlabel="x from the cutting edge (mm)",
@@ -369,11 +395,12 @@ def draw_chip(model, frame, rake_deg: float, mu: float, path: str) -> str:
 
     cut = model.cut
     corners, alive = _elements(model, frame)
-    top = _top(corners) + 0.05
+    left = _left(model)
+    top = _top(corners, left) + 0.05
     tool = _tool(model, frame.step, rake_deg)
     strain = np.asarray(frame.plastic_strain, np.float64)[alive].mean(axis=1)
     celsius = np.asarray(frame.temperature, np.float64)[alive].mean(axis=1) - 273.15
-    height = 3.2 * (top + _BELOW) / (_LEFT + _RIGHT) + 1.6
+    height = 3.2 * (top + _BELOW) / (left + _RIGHT) + 1.6
     figure, panels = plt.subplots(
         1, 2, figsize=(12, max(3.5, height)), dpi=150, layout="constrained"
     )
@@ -386,7 +413,7 @@ def draw_chip(model, frame, rake_deg: float, mu: float, path: str) -> str:
         shaded.set_clim(*clim)
         axes.add_collection(shaded)
         axes.fill(*tool.T, fc="0.7", ec="black", lw=0.8, zorder=3)
-        _window(axes, top)
+        _window(axes, top, left)
         axes.set_title(label)
         figure.colorbar(shaded, ax=axes, label=label, shrink=0.9)
     travel = float(model.start_x - cutting.tool_position(cut, model.start_x, frame.step))
@@ -480,7 +507,8 @@ def draw_gif(model, frames, rake_deg: float, mu: float, path: str) -> str:
             frames[i] for i in np.linspace(0, len(frames) - 1, FRAMES + 1).round().astype(int)
         ]
     shown = [_elements(model, frame) for frame in frames]
-    top = max(_top(corners) for corners, _ in shown) + 0.05
+    left = _left(model)
+    top = max(_top(corners, left) for corners, _ in shown) + 0.05
     figure, axes = plt.subplots(figsize=(6.4, 4.2), layout="constrained")
     shaded = PolyCollection(
         shown[0][0], array=np.zeros(len(shown[0][1])), cmap="viridis", edgecolors=_EDGES
@@ -489,7 +517,7 @@ def draw_gif(model, frames, rake_deg: float, mu: float, path: str) -> str:
     shaded.set_clim(0.0, _STRAIN_MAX)
     axes.add_collection(shaded)
     (tool,) = axes.fill(*_tool(model, 0, rake_deg).T, fc="0.7", ec="black", lw=0.8, zorder=3)
-    _window(axes, top)
+    _window(axes, top, left)
     figure.colorbar(shaded, ax=axes, label="equivalent plastic strain", shrink=0.9)
     title = axes.set_title("", fontsize=9)
     writer = PillowWriter(fps=10)
