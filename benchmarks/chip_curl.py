@@ -141,6 +141,15 @@ first own contact farther than {cutting.LANDING:g} uncut thicknesses from the ed
 
 {table(runs)}
 """
+    if pictures:
+        text += (
+            "\n"
+            + "\n".join(
+                f"![{run['label']}](results/chip_curl_{run['label'].split()[0]}.png)"
+                for run in runs
+            )
+            + "\n"
+        )
     (out / "chip_curl.md").write_text(text)
     (out / "chip_curl.json").write_text(json.dumps(runs, indent=2, default=str))
     print(text)

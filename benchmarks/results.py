@@ -84,6 +84,12 @@ SECTIONS = {
         ("--out", "{out}"),
         "{out}/cutting.md",
     ),
+    "chip_curl": Section(
+        "Chip curl: a chip breaker, and how far the default mesh holds",
+        "chip_curl.py",
+        ("--fine", "--out", "{out}"),
+        "{out}/chip_curl.md",
+    ),
 }
 VERSIONED = (
     "jax",

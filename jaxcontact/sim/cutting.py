@@ -59,6 +59,15 @@ The model, and why:
   Penalty rather than Lagrange multipliers because an explicit step has no
   system to solve; each node's stiffness is ``stiffness * m_i / dt^2``
   (LS-DYNA's soft constraint), stable in the step whatever the node's mass.
+* **Chip curl**: on the plain rake face the chip climbs straight, however
+  far the tool goes (nothing in the model bends a free chip: no heat
+  conduction, no strain gradient across it from one). ``breaker`` puts an
+  obstruction-type chip breaker on the tool, a backwall that bends the chip
+  (chip breaking by an obstruction: Nakayama, 1962, *Bull. JSME* 5(17), 142-150);
+  curled, the chip lands on the uncut workpiece ahead of the tool (``ahead``
+  leaves room for it), where the self-contact search holds it.
+  ``Record.landed`` counts own contacts farther than ``LANDING`` uncut
+  thicknesses from the edge: the chip on the workpiece or on itself.
 * **Time integration**: central differences (``sim.explicit``) at
   ``safety`` (0.3) times the stable step of the smallest element, linear
   bulk viscosity (0.06, LS-DYNA's default). Mass scaling: the density times
