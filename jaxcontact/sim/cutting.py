@@ -200,6 +200,24 @@ class Cutting:
                     f"got {self.breaker!r}"
                 )
             object.__setattr__(self, "breaker", (land, angle, length))
+            # The outline stays one simple polygon at every rake the demo takes
+            # (±30°): the land's end left of the line from the flank's end to
+            # the wall's end (a short, steep wall would fold the outline).
+            for rake in (-30.0, 0.0, 30.0):
+                corners = np.asarray(
+                    tool_outline(
+                        np.zeros(2), math.radians(rake), self.edge_radius, np.float32,
+                        breaker=self.breaker,
+                    )
+                )  # fmt: skip
+                flank_end, wall_end, land_end = corners[-3:]
+                a, b = wall_end - flank_end, land_end - flank_end
+                if a[0] * b[1] - a[1] * b[0] <= 0:
+                    raise ValueError(
+                        f"Cutting.breaker {self.breaker!r} folds the tool's outline at a "
+                        f"rake of {rake:g}°: the wall must reach past the line from the "
+                        "flank's end to the land's end (a longer wall or a smaller angle)"
+                    )
 
     # -- derived numbers -----------------------------------------------------
 
