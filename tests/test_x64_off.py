@@ -10,23 +10,17 @@ errors and the dtype rules, with the tests that need float64 skipped
 (conftest.py) and the sweeps over random scenes' sizes (tests/test_all_to_all.py,
 tests/test_swept.py) at their largest size only. Gradients and transforms (tests/test_grad.py,
 tests/test_transforms.py) run with x64 on only since 0.4.0, to keep CI
-under its ceiling; their float32 programs are the same but for index dtypes. It runs
-with XLA's default code generation even where the rest of the suite compiles
-faster (``JAXCONTACT_FAST_COMPILE=1``, as in CI). By hand, the same:
+under its ceiling; their float32 programs are the same but for index dtypes. By hand, the same:
 ``JAXCONTACT_X64=0 python -m pytest -q -n 2 -m x64_off``; the whole suite
 that way: ``JAXCONTACT_X64=0 python -m pytest -q -n 2``.
 """
 
 import pytest
 
-from tests.conftest import DEFAULT_XLA
 from tests.helpers import X64, assert_pytest_passes_in_subprocess
 
 
 @pytest.mark.slow
 @pytest.mark.skipif(not X64, reason="this process runs with x64 off already")
 def test_the_default_path_with_x64_off():
-    # As most users run: x64 off and XLA's default code generation, whatever
-    # JAXCONTACT_FAST_COMPILE this process runs with (tests/conftest.py).
-    env = {"JAXCONTACT_X64": "0", "JAXCONTACT_FAST_COMPILE": "0", "XLA_FLAGS": DEFAULT_XLA}
-    assert_pytest_passes_in_subprocess(["-m", "x64_off", "tests"], env)
+    assert_pytest_passes_in_subprocess(["-m", "x64_off", "tests"], {"JAXCONTACT_X64": "0"})
