@@ -37,15 +37,12 @@ import time
 import warnings
 
 import numpy as np
+from cutting import markdown_table  # benchmarks/cutting.py, beside this script
 
 from jaxcontact.sim import cutting, cutting_demo
 
 RESULTS = pathlib.Path(__file__).parent / "results"
 CURL = cutting_demo.CURL
-
-
-def _travel_at(model, step: int) -> float:
-    return float(model.start_x - cutting.tool_position(model.cut, model.start_x, step))
 
 
 def measure(cut: cutting.Cutting, label: str, out: pathlib.Path, pictures: bool) -> dict:
@@ -60,7 +57,9 @@ def measure(cut: cutting.Cutting, label: str, out: pathlib.Path, pictures: bool)
         element_um=cut.element * 1000,
         travel_mm=cut.travel,
         breaker=cut.breaker,
-        first_erosion_at_travel_mm=_travel_at(model, int(eroded[0])) if eroded.size else None,
+        first_erosion_at_travel_mm=(
+            cutting.travel_at(model, int(eroded[0])) if eroded.size else None
+        ),
         own_depth_over_element=float(np.max(record.own_depth)) / cut.element,
         wall_s=time.perf_counter() - started,
     )
@@ -79,10 +78,6 @@ def measure(cut: cutting.Cutting, label: str, out: pathlib.Path, pictures: bool)
         flush=True,
     )
     return summary
-
-
-def _shown(value, form: str) -> str:
-    return "never" if value is None else form.format(value)
 
 
 def table(runs: list[dict]) -> str:
@@ -106,11 +101,7 @@ def table(runs: list[dict]) -> str:
         ("steps", "steps", "{}"),
         ("wall time, compile included (s)", "wall_s", "{:.0f}"),
     ]
-    head = "| | " + " | ".join(run["label"] for run in runs) + " |"
-    lines = [head, "|---" * (len(runs) + 1) + "|"]
-    for name, key, form in rows:
-        lines.append(f"| {name} | " + " | ".join(_shown(run[key], form) for run in runs) + " |")
-    return "\n".join(lines)
+    return markdown_table(runs, rows)
 
 
 def main() -> None:

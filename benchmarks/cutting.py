@@ -62,6 +62,17 @@ def measure(cut: cutting.Cutting, label: str) -> dict:
     return summary
 
 
+def markdown_table(runs: list[dict], rows) -> str:
+    """A column per run (headed by its ``label``), a row per ``(name, key,
+    format)`` of ``rows``; a value of None reads "never"."""
+    head = "| | " + " | ".join(run["label"] for run in runs) + " |"
+    lines = [head, "|---" * (len(runs) + 1) + "|"]
+    for name, key, form in rows:
+        cells = ("never" if run[key] is None else form.format(run[key]) for run in runs)
+        lines.append(f"| {name} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
 def table(runs: list[dict]) -> str:
     rows = [
         ("cutting force F_c (N/mm)", "cutting_force_N_per_mm", "{:.1f}"),
@@ -85,11 +96,7 @@ def table(runs: list[dict]) -> str:
         ("steps per second (the first compile included)", "steps_per_second", "{:.0f}"),
         ("contact detection's share of a step", "detection_share", "{:.2f}"),
     ]
-    head = "| | " + " | ".join(run["label"] for run in runs) + " |"
-    lines = [head, "|---" * (len(runs) + 1) + "|"]
-    for name, key, form in rows:
-        lines.append(f"| {name} | " + " | ".join(form.format(run[key]) for run in runs) + " |")
-    return "\n".join(lines)
+    return markdown_table(runs, rows)
 
 
 def main() -> None:

@@ -466,6 +466,11 @@ def tool_position(cut: Cutting, start_x: float, step) -> Array:
     return start_x - cut.velocity * cut.dt * moved
 
 
+def travel_at(model: Model, step) -> float:
+    """How far the tool has cut at ``step`` (mm, on the host)."""
+    return model.start_x - float(tool_position(model.cut, model.start_x, step))
+
+
 # The edge's centre above the parting line, in edge radii, as the uncut
 # layer's nodes meet it (a radius below: the rake face reaches down to the
 # line) and as the base's nodes meet it (a radius above: the edge's lowest
@@ -833,11 +838,7 @@ def summary(model: Model, state: State, record: Record, frames, seconds: float, 
     )
     k_c11, m_c = machining.KIENZLE_CK45
     landed = np.flatnonzero(np.asarray(record.landed) > 0)
-    lands_at = (
-        model.start_x - float(tool_position(cut, model.start_x, int(landed[0])))
-        if landed.size
-        else None
-    )
+    lands_at = travel_at(model, int(landed[0])) if landed.size else None
     return {
         "material": "AISI 1045 (Johnson-Cook, Jaspers and Dautzenberg 2002)",
         "cutting_speed_m_per_min": cut.speed,

@@ -423,7 +423,7 @@ def draw_chip(model, frame, rake_deg: float, mu: float, path: str) -> str:
         _window(axes, top, left)
         axes.set_title(label)
         figure.colorbar(shaded, ax=axes, label=label, shrink=0.9)
-    travel = float(model.start_x - cutting.tool_position(cut, model.start_x, frame.step))
+    travel = cutting.travel_at(model, frame.step)
     figure.suptitle(
         f"Orthogonal cutting of AISI 1045, {_conditions(cut, rake_deg, mu)}: "
         f"after {travel:.2f} mm of travel ({frame.step:,} steps)"
@@ -533,7 +533,7 @@ def draw_gif(model, frames, rake_deg: float, mu: float, path: str) -> str:
             shaded.set_verts(corners)
             shaded.set_array(np.asarray(frame.plastic_strain, np.float64)[alive].mean(axis=1))
             tool.set_xy(_tool(model, frame.step, rake_deg))
-            travel = float(model.start_x - cutting.tool_position(cut, model.start_x, frame.step))
+            travel = cutting.travel_at(model, frame.step)
             title.set_text(f"{_conditions(cut, rake_deg, mu)}\ntravel {travel:.3f} mm")
             writer.grab_frame()
     plt.close(figure)
