@@ -272,20 +272,25 @@ def scene_table(scene_rows, names, value) -> list[str]:
 
 
 def plot(against_n, against_m, names, out) -> list[str]:
-    """Time against N, time against M and memory against N, log-log, one line per method."""
+    """Time against N, time against M and memory against N, log-log, one line per method
+    (one look per method: ``jaxcontact.bench.style``), each panel's legend below it."""
     plt = _run.pyplot(out)
     if plt is None:
         return []
-    figure, (by_n, by_m, memory) = plt.subplots(1, 3, figsize=(15, 4.5))
+    from jaxcontact.bench import style
+
+    figure, (by_n, by_m, memory) = plt.subplots(1, 3, figsize=(15, 6.2))
+    used = {}
     for name in names:
+        looks = style.style(name, used)
         for axes, rows, axis in ((by_n, against_n, "nodes"), (by_m, against_m, "segments")):
             sizes, times = points(rows, name, axis)
             if sizes:
                 fitted = _fixed(slope(sizes, times))
-                axes.plot(sizes, times, marker="o", ms=3, label=f"{name} (slope {fitted})")
+                axes.plot(sizes, times, **looks, label=f"{name} (slope {fitted})")
         sizes, held = points(against_n, name, "nodes", memory_mib)
         if sizes:
-            memory.plot(sizes, held, marker="o", ms=3, label=name)
+            memory.plot(sizes, held, **looks, label=name)
     at_m, at_n = against_n[0]["segments"], against_m[0]["nodes"]
     by_n.set(xlabel="slave nodes N", ylabel="median (ms)", title=f"time against N, M = {at_m:,}")
     by_m.set(xlabel="segments M", ylabel="median (ms)", title=f"time against M, N = {at_n:,}")
@@ -296,15 +301,17 @@ def plot(against_n, against_m, names, out) -> list[str]:
     )
     for axes in (by_n, by_m, memory):
         axes.set(xscale="log", yscale="log")
+    guide = style.style("slope 1", used)
     for axes in (by_n, by_m):
         # A slope-1 guide through the middle of what is drawn, to read the slopes by eye.
         (low, high), (bottom, top) = axes.get_xlim(), axes.get_ylim()
         middle = np.sqrt(bottom * top / (low * high))
-        axes.plot([low, high], [low * middle, high * middle], ":", color="grey", label="slope 1")
+        axes.plot([low, high], [low * middle, high * middle], **guide, label="slope 1")
         axes.set_xlim(low, high)
+        axes.set_ylim(bottom, top)
     for axes in (by_n, by_m, memory):
         axes.grid(True, which="both", alpha=0.3)
-        axes.legend(fontsize=7)
+        style.legend_outside(axes, "below", panels=[axes])
     return [_run.save_figure(figure, out, "size_scaling")]
 
 

@@ -302,24 +302,38 @@ def _table(rows):
 
 
 def _plot(rows, x_key, y_keys, path, title, xlabel, ylabel, group="dtype", log_y=True):
+    """One line per ``group`` and ``y_keys`` entry; an entry whose format has no marker (a
+    bound) drawn as that group's guide. Looks from ``jaxcontact.bench.style``."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    figure, axes = plt.subplots(figsize=(6, 4))
+    from jaxcontact.bench import style
+
+    figure, axes = plt.subplots(figsize=(8, 4), layout="constrained")
+    used = {}
     for label in sorted({row[group] for row in rows}):
         mine = [row for row in rows if row[group] == label]
-        for y_key, style in y_keys:
+        for y_key, fmt in y_keys:
+            bound = not any(marker in fmt for marker in "os^vD*+x.")
+            looks = style.style(f"{label.split()[0]} bound" if bound else label, used)
             xs = [max(row[x_key], 1e-1) if x_key == "offset" else row[x_key] for row in mine]
             ys = [max(row[y_key], 1e-20) if log_y else row[y_key] for row in mine]
-            (axes.loglog if log_y else axes.semilogx)(xs, ys, style, label=f"{label}: {y_key}")
+            axes.plot(xs, ys, **looks, label=f"{label}: {y_key}", clip_on=log_y)
+    axes.set_xscale("log")
+    if log_y:
+        axes.set_yscale("log")
+    else:
+        axes.set_ylim(bottom=0)  # a rate: 0 and up, the zeros on the axis, no negative tick
+    if x_key == "offset":  # 0 drawn at 0.1, labelled 0
+        style.log_axis_from_zero(axes.xaxis, 0.1, max(row[x_key] for row in rows))
+        xlabel = xlabel.replace(" (0 drawn at 0.1)", "")
     axes.set_title(title)
     axes.set_xlabel(xlabel)
     axes.set_ylabel(ylabel)
-    axes.grid(True, which="both", alpha=0.3)
-    axes.legend(fontsize=7)
-    figure.tight_layout()
+    axes.grid(True, which="major", alpha=0.3)
+    style.legend_outside(axes)
     figure.savefig(path, dpi=110)
     plt.close(figure)
 

@@ -152,10 +152,13 @@ def averages(rows) -> str:
 
 
 def plot(rows, out) -> list[str]:
-    """Fig. 8 (time against nodes, log axes) and Fig. 9 (time against travel) as PNGs."""
+    """Fig. 8 (time against nodes, log axes) and Fig. 9 (time against travel) as PNGs; one
+    look per method (``jaxcontact.bench.style``), the legend right of the data."""
     plt = _run.pyplot(out)
     if plt is None:
         return []
+    from jaxcontact.bench import style
+
     paths = []
     for test, xlabel, figure_name in (
         ("paper Test 1", "workpiece nodes", "paper_test1.png"),
@@ -164,22 +167,28 @@ def plot(rows, out) -> list[str]:
         chosen = [r for r in rows if r["scene"] == test]
         if not chosen:
             continue
-        figure, axes = plt.subplots(figsize=(7, 4.5), layout="constrained")
-        for name in METHODS:
+        figure, axes = plt.subplots(figsize=(8.5, 4.5), layout="constrained")
+        used = {}
+        for name in dict.fromkeys(r["method"] for r in chosen):  # METHODS, as run
             mine = [r for r in chosen if r["method"] == name]
             if test == "paper Test 1":
                 xs = [r["nodes"] for r in mine]
             else:
                 xs = [float(r["position"][2:]) for r in mine]
             ys = [r["median_ms"] / 1e3 for r in mine]
-            axes.plot(xs, ys, marker="o", ms=3, label=f"jaxcontact {name}")
-        for (label, seconds), style in zip(PAPER_AVERAGE_S.items(), ("--", ":"), strict=True):
-            axes.axhline(seconds, color="0.3", ls=style, lw=1, label=f"{label}: {seconds} s avg")
+            axes.plot(xs, ys, **style.style(name, used), label=f"jaxcontact {name}")
+        for label, seconds in PAPER_AVERAGE_S.items():
+            looks = style.style(label, used, kind="guide")
+            axes.axhline(seconds, **looks, label=f"{label}: {seconds} s avg")
         if test == "paper Test 1":
             axes.set_xscale("log")
+        else:
+            # Travels from 0: the first points clear of the spine, no negative tick.
+            axes.set_xlim(left=-0.015 * max(xs))
         axes.set_yscale("log")
         axes.set(xlabel=xlabel, ylabel="run time per call (s), compile apart", title=test)
-        axes.legend(fontsize=7)
+        axes.grid(True, which="major", alpha=0.3)
+        style.legend_outside(axes)
         paths.append(os.path.join(out, figure_name))
         figure.savefig(paths[-1], dpi=120)
         plt.close(figure)

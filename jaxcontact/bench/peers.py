@@ -150,21 +150,28 @@ def ratios(rows) -> str:
 
 
 def plot(rows, out) -> list[str]:
-    """Run time against nodes for every method, one panel per scene kind, log axes."""
+    """Run time against nodes for every method, one panel per scene kind, log axes; one look
+    per method (``jaxcontact.bench.style``), one legend right of the panels."""
     plt = _run.pyplot(out)
     if plt is None:
         return []
+    from jaxcontact.bench import style
+
     kinds = list(dict.fromkeys(r["scene"].split(", M=")[0] for r in rows))
-    figure, panels = plt.subplots(1, len(kinds), figsize=(5 * len(kinds), 4.5), squeeze=False)
+    figure, panels = plt.subplots(
+        1, len(kinds), figsize=(4.6 * len(kinds) + 3.4, 4.5), squeeze=False
+    )
+    used = {}
     for axes, kind in zip(panels[0], kinds, strict=True):
         mine = [r for r in rows if r["scene"].startswith(kind) and r["median_ms"] != ""]
-        for name in dict.fromkeys(r["method"] for r in mine):
+        for name in dict.fromkeys(r["method"] for r in rows):  # every panel in one order
             points = [(r["nodes"], r["median_ms"]) for r in mine if r["method"] == name]
-            style = "-" if name in ("all_to_all", LIBRARY, COMPACT) else "--"
-            axes.plot(*zip(*points, strict=True), style, marker="o", ms=3, label=name)
+            if points:
+                axes.plot(*zip(*points, strict=True), **style.style(name, used), label=name)
         axes.set(xscale="log", yscale="log", xlabel="slave nodes N", ylabel="median (ms)")
         axes.set_title(kind, fontsize=9)
-        axes.legend(fontsize=6)
+        axes.grid(True, which="major", alpha=0.3)
+    style.legend_outside(panels[0][-1])
     return [_run.save_figure(figure, out, "peers")]
 
 

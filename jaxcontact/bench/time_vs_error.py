@@ -133,42 +133,55 @@ def run_offsets(num_nodes, offsets, with_bucket) -> list[dict]:
     return rows
 
 
+def _wrong_rows(row) -> int:
+    return row["missed"] + row["false"] + row["wrong_segment"]
+
+
 def plot(rows, out) -> list[str]:
+    """Pareto plots (run time against wrong rows, and against the largest gap error) per
+    scene, and the float32 gap error against the offset; one look per method (``style``)."""
     plt = _run.pyplot(out)
     if plt is None:
         return []
+    from jaxcontact.bench import style
+
     paths = []
     tradeoff = [r for r in rows if r["median_ms"] != ""]
     scenes = list(dict.fromkeys(r["scene"] for r in tradeoff))
-    figure, panels = plt.subplots(2, len(scenes), figsize=(6 * len(scenes), 8), squeeze=False)
+    figure, panels = plt.subplots(
+        2, len(scenes), figsize=(5.5 * len(scenes) + 3.5, 8), squeeze=False
+    )
+    used = {}
     for column, scene in enumerate(scenes):
         mine = [r for r in tradeoff if r["scene"] == scene]
-        for axes, metric, ylabel in (
-            (
-                panels[0][column],
-                lambda r: r["missed"] + r["false"] + r["wrong_segment"],
-                "missed + false + wrong segment",
-            ),
-            (
-                panels[1][column],
-                lambda r: max(float(r["max_gap_error"]), 1e-17),
-                "largest gap error",
-            ),
+        for axes, metric in (
+            (panels[0][column], _wrong_rows),
+            (panels[1][column], lambda r: max(float(r["max_gap_error"]), 1e-17)),
         ):
-            points = sorted((r["median_ms"], metric(r), r["method"]) for r in mine)
+            points = sorted((r["median_ms"], metric(r)) for r in mine)
             front, best = [], np.inf
-            for time_ms, error, _ in points:  # Pareto front: no faster point is as accurate
+            for time_ms, error in points:  # Pareto front: no faster point is as accurate
                 if error < best:
                     front.append((time_ms, error))
                     best = error
-            for index, (time_ms, error, name) in enumerate(points):
-                marker = "osD^v<>ph*"[index % 10]
-                axes.scatter(time_ms, error, s=22, marker=marker, label=name)
-            axes.plot(*zip(*front, strict=True), "k--", lw=0.8, label="Pareto front")
-            counts = "+" in ylabel  # counts may be 0: linear near zero; gap errors: log
-            axes.set(xscale="log", yscale="symlog" if counts else "log")
-            axes.set(xlabel="median run time (ms)", ylabel=ylabel, title=scene)
-            axes.legend(fontsize=6)
+            for row in mine:  # in the order run: the same legend order in every panel
+                looks = {**style.style(row["method"], used), "linestyle": "none"}
+                looks["markersize"] += 3
+                axes.plot(row["median_ms"], metric(row), **looks, label=row["method"], zorder=2)
+            front_looks = style.style("Pareto front", used)
+            axes.plot(*zip(*front, strict=True), **front_looks, label="Pareto front", zorder=1)
+            axes.set_xscale("log")
+            axes.set(xlabel="median run time (ms)", title=scene)
+            axes.grid(True, which="major", alpha=0.3)
+        counts, errors = panels[0][column], panels[1][column]
+        style.count_axis(counts, max(_wrong_rows(r) for r in mine))
+        counts.set_ylabel("wrong rows: missed + false + wrong segment\n(0, then log above 1)")
+        errors.set_yscale("log")
+        exact = any(float(r["max_gap_error"]) == 0 for r in mine)
+        errors.set_ylabel("largest gap error" + (" (0 drawn at 1e-17)" if exact else ""))
+        for axes in (counts, errors):
+            style.plain_log_labels(axes.xaxis)
+    style.legend_outside(panels[0][-1])
     figure.tight_layout()
     paths.append(os.path.join(out, "time_vs_error.png"))
     figure.savefig(paths[-1], dpi=120)
@@ -176,21 +189,32 @@ def plot(rows, out) -> list[str]:
 
     offsets = [r for r in rows if r["position"].startswith("o=")]
     if offsets:
-        figure, axes = plt.subplots(figsize=(6.5, 4.5), layout="constrained")
-        for name in dict.fromkeys(r["method"] for r in offsets):
+        figure, axes = plt.subplots(figsize=(8, 4.5), layout="constrained")
+        used = {}
+        names = list(dict.fromkeys(r["method"] for r in offsets))
+        for index, name in enumerate(names):
             mine = [r for r in offsets if r["method"] == name]
             xs = [max(float(r["position"][2:]), 0.1) for r in mine]
-            axes.plot(xs, [float(r["max_gap_error"]) for r in mine], "o-", label=name)
-        grid = np.logspace(-1, 6, 50)
-        axes.plot(grid, np.spacing(np.float32(grid)), "k:", label="one float32 ulp of o")
+            looks = style.style(name, used)
+            # Methods may agree exactly: each earlier one drawn wider, to show beneath.
+            wider = len(names) - 1 - index
+            looks["markersize"] += 4 * wider
+            looks["linewidth"] += 2.5 * wider
+            axes.plot(xs, [float(r["max_gap_error"]) for r in mine], **looks, label=name)
+        grid = np.logspace(0, 6, 50)
+        ulp = "one float32 ulp of o"
+        axes.plot(grid, np.spacing(np.float32(grid)), **style.style(ulp, used), label=ulp)
         axes.set(
             xscale="log",
             yscale="log",
-            xlabel="coordinate offset o (0 drawn at 0.1)",
+            xlabel="coordinate offset o",
             ylabel="largest float32 gap error",
             title="float32 gap error against offset",
         )
-        axes.legend(fontsize=7)
+        top = max(float(r["position"][2:]) for r in offsets)
+        style.log_axis_from_zero(axes.xaxis, 0.1, top)
+        axes.grid(True, which="major", alpha=0.3)
+        style.legend_outside(axes)
         paths.append(os.path.join(out, "gap_error_vs_offset.png"))
         figure.savefig(paths[-1], dpi=120)
         plt.close(figure)
