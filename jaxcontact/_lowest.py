@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import functools
+
 import jax
 import jax.numpy as jnp
 
@@ -64,16 +66,19 @@ def lowest_score(
     block = num_steps if num_steps <= unroll else block
     num_blocks = -(-num_steps // block)
 
-    def visit_block(carry, first):
+    def visit(offset, carry, first):
         best, choice = carry
-        for offset in range(block):
-            step = first + offset
-            value, segment = score(jnp.minimum(step, num_steps - 1))
-            value = jnp.where(step < num_steps, value, jnp.inf)
-            better = value < best
-            best = jnp.where(better, value, best)
-            choice = jnp.where(better, segment, choice)
-        return (best, choice), None
+        step = first + offset
+        value, segment = score(jnp.minimum(step, num_steps - 1))
+        value = jnp.where(step < num_steps, value, jnp.inf)
+        better = value < best
+        return jnp.where(better, value, best), jnp.where(better, segment, choice)
+
+    def visit_block(carry, first):
+        # Traced once and unrolled in the jaxpr (``unroll=True``), not by a
+        # Python loop that traced ``score`` ``block`` times.
+        visit_first = functools.partial(visit, first=first)
+        return jax.lax.fori_loop(0, block, visit_first, carry, unroll=True), None
 
     firsts = jnp.arange(num_blocks, dtype=jnp.int32) * block
     carry = (best, choice)

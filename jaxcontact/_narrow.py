@@ -18,11 +18,14 @@ from jaxcontact._broad import Box
 from jaxcontact._cells import CellLists, list_candidates, segment_in_slot
 from jaxcontact._geometry import Edge, edge
 from jaxcontact._inputs import Segments
-from jaxcontact._lowest import lowest_score
+from jaxcontact._lowest import UNROLL, lowest_score
 from jaxcontact._pairs import pick
 from jaxcontact._sizes import Sizes
 from jaxcontact._sort import stable_order
 from jaxcontact._types import Array
+
+# Up to this many pairs, ``search_all`` scores the whole plane at once (``_lowest_in_plane``).
+PLANE_PAIRS = 1 << 15
 
 
 class Queries(NamedTuple):
@@ -49,9 +52,31 @@ def search_all(pair_value, segments: Segments, num_rows: int, dtype) -> tuple[Ar
         value = jnp.where(segments.ok[k], value, jnp.inf)
         return value, jnp.broadcast_to(k, value.shape)
 
+    num_segments = segments.ok.shape[0]
+    if num_segments > UNROLL and num_rows * num_segments <= PLANE_PAIRS:
+        return _lowest_in_plane(pair_value, edges, segments.ok, num_rows, dtype)
     # Rows are not masked here but where the result is assembled: any per-row
     # mask fused into this loop made it 3-4x slower (measured).
-    return lowest_score(score, segments.ok.shape[0], num_rows, dtype)
+    return lowest_score(score, num_segments, num_rows, dtype)
+
+
+def _lowest_in_plane(pair_value, edges, segment_ok: Array, num_rows: int, dtype):
+    """``lowest_score``'s answer from the whole (M, S) plane of scores at once.
+
+    For small scenes with more segments than ``lowest_score`` unrolls (the
+    workpiece's own outline in ``sim.cutting``): one fused pass and one
+    reduction, where the running minimum ran a loop of ``M / 8`` steps, a
+    few kernels each, which is the whole of a small scene's time. ``argmin``
+    takes the first of equal scores, the lower index, as the running minimum
+    does; NaN scores are no candidate there (``value < best`` is False), so
+    they are ``inf`` here.
+    """
+    del num_rows
+    values = jax.vmap(pair_value)(edges)
+    values = jnp.where(segment_ok[:, None] & ~jnp.isnan(values), values, jnp.inf).astype(dtype)
+    choice = jnp.argmin(values, axis=0).astype(jnp.int32)
+    best = jnp.min(values, axis=0)
+    return jnp.where(best < jnp.inf, choice, -1), best
 
 
 def _search_rows(pair_value, segments: Segments, listed: CellLists, capacity: int, dtype):

@@ -30,6 +30,9 @@ from jaxcontact._inputs import Segments
 from jaxcontact._sort import stable_order
 from jaxcontact._types import Array
 
+# Up to this many segments, ``_first_match`` uses the M x M table of matches.
+TABLE_SEGMENTS = 128
+
 
 class Chains(NamedTuple):
     """Arc-length coordinates along the outlines: ``u`` runs from a chain's
@@ -46,8 +49,17 @@ class Chains(NamedTuple):
 def _first_match(keys: Array, wanted: Array, exclude: Array, num_values: int) -> Array:
     """i32[M]: per k, the lowest j != exclude[k] with keys[j] == wanted[k], or -1.
 
-    ``keys`` lie in ``[-1, num_values - 1)``.
+    ``keys`` lie in ``[-1, num_values - 1)``. Up to ``TABLE_SEGMENTS``
+    segments the M x M table of matches answers it in one fused pass and a
+    reduction; past that, a sort and a binary search (O(M log M)), whose
+    loop and gathers were most of a small outline's kernels.
     """
+    num_keys = keys.shape[0]
+    if num_keys <= TABLE_SEGMENTS:
+        index = jnp.arange(num_keys, dtype=jnp.int32)
+        match = (keys[None, :] == wanted[:, None]) & (index[None, :] != exclude[:, None])
+        first = jnp.argmax(match, axis=1).astype(jnp.int32)
+        return jnp.where(jnp.any(match, axis=1), first, -1)
     order = stable_order(keys + 1, num_values)
     ordered = keys[order]
     last = keys.shape[0] - 1
