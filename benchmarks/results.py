@@ -70,6 +70,12 @@ SECTIONS = {
         "{out}/size_scaling.md",
     ),
     "stages": Section("Where the bucket sort's time goes", "stages.py"),
+    "targets": Section(
+        "Issue 25's targets: Search.closest against the numba grid",
+        "targets.py",
+        ("--out", "{out}"),
+        "{out}/targets.md",
+    ),
     "long_process": Section(
         "Long processes: memory maps",
         "long_process.py",
