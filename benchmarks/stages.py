@@ -62,6 +62,7 @@ from jaxcontact._bucket import measure_contacts
 from jaxcontact._cells import list_candidates
 from jaxcontact._geometry import squared_distance
 from jaxcontact._narrow import search_all, search_listed, vmapped
+from jaxcontact._pairs import ruled
 from jaxcontact._sizes import measure
 from jaxcontact._writeback import empty_contact, write_blocks
 from jaxcontact.bench import _run
@@ -97,10 +98,13 @@ def stage_programs(sizes, num_rows):
     def cells(kept, ok, segments, boxes):
         return list_candidates(kept, ok, segments, boxes, sizes)[0]
 
+    # The pair score as the detectors call it: ``(*row, row_tags, (edge, tags))``, no rule.
+    kernel = ruled(squared_distance, None)
+
     def search(kept, segments, listed):
         if sizes.use_cells:
-            return search_listed(squared_distance, (kept,), segments, listed, sizes)[0]
-        pair_value = vmapped(squared_distance, kept)
+            return search_listed(kernel, (kept, None), segments, listed, sizes)[0]
+        pair_value = vmapped(kernel, kept, None)
         return search_all(pair_value, segments, kept.shape[0], kept.dtype)[0]
 
     def assemble(kept, segments, choice, radius, ok):

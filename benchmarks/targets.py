@@ -225,9 +225,8 @@ def main() -> None:
     command = "python benchmarks/targets.py" + (" --quick" if args.quick else "")
     text = "\n".join(
         [
-            f"Command: `{command}`" + (" under `taskset -c 0`" if threads == 1 else ""),
-            "",
-            f"{_run.machine()}; float32; {repeats} rounds",
+            f"`{command}`; {_run.machine()}; float32; median of {repeats} interleaved rounds "
+            "after 2 warm-up runs, compile apart.",
             "",
             table(rows),
             "",
