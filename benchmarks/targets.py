@@ -91,22 +91,14 @@ def build(kind: str, size: int, parameter):
 
 
 def step(search: Search, x, surface, pair):
-    """``(jitted step, args)``: ``search.closest`` on its own allocation at ``x``."""
-    self_contact = bool(pair)
+    """``(jitted step, args)``: ``search.closest`` on its own allocation at ``x``;
+    ``pair`` (the pair rule's keywords, or {}) goes in as a traced argument."""
     state = search.allocate(x, surface, **pair)
-    node = pair.get("slave_node")
 
-    if self_contact:
+    def closest(state, x, surface, pair):
+        return search.closest(state, x, surface, **pair)[0]
 
-        def closest(state, x, surface, node):
-            return search.closest(state, x, surface, slave_node=node)[0]
-
-        return jax.jit(closest), (state, x, surface, node)
-
-    def closest(state, x, surface):
-        return search.closest(state, x, surface)[0]
-
-    return jax.jit(closest), (state, x, surface)
+    return jax.jit(closest), (state, x, surface, pair)
 
 
 def _rows(result, num_rows: int):
@@ -126,11 +118,12 @@ def run_scene(kind: str, size: int, parameter, repeats: int, threads: int) -> li
             form = "compact" if compact else "dense"
             calls[f"Search.closest, {how}, {form}"] = step(search, x, surface, pair)
     start, end = _run.endpoints(surface)
-    host = (np.asarray(x), start, end, radius)
     for name, count in ((NUMBA, 1), (NUMBA2, 2)):
         if count > threads:
             continue
-        peer = _run.numba_peer("closest", count, host[0].dtype, host[:3], radius=radius)
+        peer = _run.numba_peer(
+            "closest", count, x.dtype, (np.asarray(x), start, end), radius=radius
+        )
         if isinstance(peer, str):
             print(f"{name}: {peer}", file=sys.stderr)
             continue
@@ -140,8 +133,8 @@ def run_scene(kind: str, size: int, parameter, repeats: int, threads: int) -> li
     reference = None
     checks = {}
     for name, (fn, args) in calls.items():
-        segment, found = _rows(fn(*args), len(x)) if name.startswith("Search") else (None, None)
         if name.startswith("Search"):
+            segment, found = _rows(fn(*args), len(x))
             if reference is None:
                 reference = (segment, found)
             same = np.array_equal(found, reference[1]) and np.array_equal(

@@ -54,13 +54,13 @@ def search_all(pair_value, segments: Segments, num_rows: int, dtype) -> tuple[Ar
 
     num_segments = segments.ok.shape[0]
     if num_segments > UNROLL and num_rows * num_segments <= PLANE_PAIRS:
-        return _lowest_in_plane(pair_value, edges, segments.ok, num_rows, dtype)
+        return _lowest_in_plane(pair_value, edges, segments.ok, dtype)
     # Rows are not masked here but where the result is assembled: any per-row
     # mask fused into this loop made it 3-4x slower (measured).
     return lowest_score(score, num_segments, num_rows, dtype)
 
 
-def _lowest_in_plane(pair_value, edges, segment_ok: Array, num_rows: int, dtype):
+def _lowest_in_plane(pair_value, edges, segment_ok: Array, dtype):
     """``lowest_score``'s answer from the whole (M, S) plane of scores at once.
 
     For small scenes with more segments than ``lowest_score`` unrolls (the
@@ -71,7 +71,6 @@ def _lowest_in_plane(pair_value, edges, segment_ok: Array, num_rows: int, dtype)
     does; NaN scores are no candidate there (``value < best`` is False), so
     they are ``inf`` here.
     """
-    del num_rows
     values = jax.vmap(pair_value)(edges)
     values = jnp.where(segment_ok[:, None] & ~jnp.isnan(values), values, jnp.inf).astype(dtype)
     choice = jnp.argmin(values, axis=0).astype(jnp.int32)

@@ -44,7 +44,7 @@ def test_plane_chooses_as_the_running_minimum_does():
             return jnp.where(ok[k], value, jnp.inf), jnp.broadcast_to(k, x.shape[:1])
 
         loop = lowest_score(score, 40, x.shape[0], x.dtype)
-        plane = _lowest_in_plane(lambda e: pair_value(x, e), edges, ok, x.shape[0], x.dtype)
+        plane = _lowest_in_plane(lambda e: pair_value(x, e), edges, ok, x.dtype)
         return loop, plane
 
     (loop_choice, loop_best), (plane_choice, plane_best) = both(x, starts, ends, ok)
