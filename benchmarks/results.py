@@ -70,6 +70,7 @@ SECTIONS = {
         "{out}/size_scaling.md",
     ),
     "stages": Section("Where the bucket sort's time goes", "stages.py"),
+    "counting_sort": Section("Counting sorts against the sort (issue 25)", "counting_sort.py"),
     "targets": Section(
         "Issue 25's targets: Search.closest against the numba grid",
         "targets.py",

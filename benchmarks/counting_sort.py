@@ -1,0 +1,104 @@
+"""Issue 25's "counting sorts where the keys are few", measured before building it.
+
+``_narrow.search_listed`` orders the kept slaves by the length of their
+candidate lists, longest first: a stable sort of ``capacity - length``, keys
+in ``[0, capacity]`` (``_sort.stable_order``: one sort of ``key * E + row``).
+With so few distinct keys a counting sort needs no comparison sort: count
+each key, an exclusive sum of the counts gives each key's first place, and a
+prefix count of the equal keys before a row gives its place among them.
+This times three ways of computing that prefix count against the sort, on
+the CPU, each checked to give the sort's order exactly:
+
+- ``one-hot cumsum``: an (E, K) table of one-hot rows, ``jnp.cumsum`` down it;
+- ``masked cumsums``: one 1-D ``jnp.cumsum`` per key;
+- ``one-hot scan``: the (E, K) table summed by ``lax.associative_scan``.
+
+Keys are drawn as on the rough die (``benchmarks/stages.py``: 81,920 kept
+slaves, about 8 % of them with a non-empty list): 80 % of the rows have the
+empty list (key = capacity), the rest a length uniform in ``[0, capacity]``.
+
+    python benchmarks/counting_sort.py            # both cores
+    taskset -c 0 python benchmarks/counting_sort.py
+
+Each form is timed over 50 calls (medians), the forms interleaved.
+"""
+
+from __future__ import annotations
+
+import time
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxcontact._sort import stable_order
+
+
+def _place(keys, prefix, counts):
+    """The order from each row's place: its key's first place plus ``prefix``."""
+    first = jnp.cumsum(counts) - counts
+    place = first[keys] + prefix
+    rows = jnp.arange(keys.shape[0], dtype=jnp.int32)
+    return jnp.zeros_like(rows).at[place].set(rows, unique_indices=True)
+
+
+def one_hot_cumsum(keys, num_keys):
+    one_hot = (keys[:, None] == jnp.arange(num_keys, dtype=jnp.int32)).astype(jnp.int32)
+    before = jnp.cumsum(one_hot, axis=0) - one_hot
+    prefix = jnp.take_along_axis(before, keys[:, None], axis=1)[:, 0]
+    return _place(keys, prefix, one_hot.sum(axis=0))
+
+
+def masked_cumsums(keys, num_keys):
+    prefix = jnp.zeros_like(keys)
+    counts = []
+    for key in range(num_keys):
+        equal = keys == key
+        running = jnp.cumsum(equal.astype(jnp.int32))
+        prefix = jnp.where(equal, running - 1, prefix)
+        counts.append(running[-1])
+    return _place(keys, prefix, jnp.stack(counts))
+
+
+def one_hot_scan(keys, num_keys):
+    one_hot = (keys[:, None] == jnp.arange(num_keys, dtype=jnp.int32)).astype(jnp.int32)
+    through = jax.lax.associative_scan(jnp.add, one_hot, axis=0)
+    prefix = jnp.take_along_axis(through, keys[:, None], axis=1)[:, 0] - 1
+    return _place(keys, prefix, through[-1])
+
+
+def _keys(num_rows: int, capacity: int, seed: int = 0) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    length = np.where(rng.random(num_rows) < 0.8, 0, rng.integers(0, capacity + 1, num_rows))
+    return (capacity - length).astype(np.int32)
+
+
+def main() -> None:
+    print(f"jax {jax.__version__}, {jax.devices()[0].platform}; medians of 50 calls, ms")
+    print("| rows | keys | sort (stable_order) | one-hot cumsum | masked cumsums | one-hot scan |")
+    print("|---:|---:|---:|---:|---:|---:|")
+    for num_rows in (8_192, 81_920, 655_360):
+        for capacity in (7, 15, 31):
+            keys = jnp.asarray(_keys(num_rows, capacity))
+            num_keys = capacity + 1
+            forms = {
+                "sort": jax.jit(lambda k, n=num_keys: stable_order(k, n)),
+                "one-hot cumsum": jax.jit(lambda k, n=num_keys: one_hot_cumsum(k, n)),
+                "masked cumsums": jax.jit(lambda k, n=num_keys: masked_cumsums(k, n)),
+                "one-hot scan": jax.jit(lambda k, n=num_keys: one_hot_scan(k, n)),
+            }
+            want = np.asarray(forms["sort"](keys))
+            for name, form in forms.items():
+                np.testing.assert_array_equal(np.asarray(form(keys)), want, err_msg=name)
+            times = {name: [] for name in forms}
+            for _ in range(50):
+                for name, form in forms.items():
+                    start = time.perf_counter()
+                    form(keys).block_until_ready()
+                    times[name].append(time.perf_counter() - start)
+            cells = " | ".join(f"{1e3 * np.median(times[name]):.3f}" for name in forms)
+            print(f"| {num_rows:,} | {num_keys} | {cells} |")
+
+
+if __name__ == "__main__":
+    main()
