@@ -13,9 +13,10 @@ the CPU, each checked to give the sort's order exactly:
 - ``masked cumsums``: one 1-D ``jnp.cumsum`` per key;
 - ``one-hot scan``: the (E, K) table summed by ``lax.associative_scan``.
 
-Keys are drawn as on the rough die (``benchmarks/stages.py``: 81,920 kept
-slaves, about 8 % of them with a non-empty list): 80 % of the rows have the
-empty list (key = capacity), the rest a length uniform in ``[0, capacity]``.
+Keys: 80 % of the rows have the empty list (key = capacity), the rest a
+length uniform in ``[0, capacity]``, an assumed mix (on the rough die at
+10^5 x 10^4, ``benchmarks/stages.py``, 81,920 slaves are kept and 8,568
+rows find a segment); the sizes bracket that scene's 81,920 rows.
 
     python benchmarks/counting_sort.py            # both cores
     taskset -c 0 python benchmarks/counting_sort.py
