@@ -21,18 +21,19 @@ rows find a segment); the sizes bracket that scene's 81,920 rows.
     python benchmarks/counting_sort.py            # both cores
     taskset -c 0 python benchmarks/counting_sort.py
 
-Each form is timed over 50 calls (medians), the forms interleaved.
+Each form is timed over 50 calls, the forms interleaved
+(``jaxcontact.bench.timing.time_interleaved``); medians.
 """
 
 from __future__ import annotations
-
-import time
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
 from jaxcontact._sort import stable_order
+from jaxcontact.bench import _run
+from jaxcontact.bench.timing import time_interleaved
 
 
 def _place(keys, prefix, counts):
@@ -43,8 +44,13 @@ def _place(keys, prefix, counts):
     return jnp.zeros_like(rows).at[place].set(rows, unique_indices=True)
 
 
+def _one_hot(keys, num_keys):
+    """i32[E, K]: row i is 1 in column ``keys[i]``."""
+    return (keys[:, None] == jnp.arange(num_keys, dtype=jnp.int32)).astype(jnp.int32)
+
+
 def one_hot_cumsum(keys, num_keys):
-    one_hot = (keys[:, None] == jnp.arange(num_keys, dtype=jnp.int32)).astype(jnp.int32)
+    one_hot = _one_hot(keys, num_keys)
     before = jnp.cumsum(one_hot, axis=0) - one_hot
     prefix = jnp.take_along_axis(before, keys[:, None], axis=1)[:, 0]
     return _place(keys, prefix, one_hot.sum(axis=0))
@@ -62,8 +68,7 @@ def masked_cumsums(keys, num_keys):
 
 
 def one_hot_scan(keys, num_keys):
-    one_hot = (keys[:, None] == jnp.arange(num_keys, dtype=jnp.int32)).astype(jnp.int32)
-    through = jax.lax.associative_scan(jnp.add, one_hot, axis=0)
+    through = jax.lax.associative_scan(jnp.add, _one_hot(keys, num_keys), axis=0)
     prefix = jnp.take_along_axis(through, keys[:, None], axis=1)[:, 0] - 1
     return _place(keys, prefix, through[-1])
 
@@ -75,7 +80,7 @@ def _keys(num_rows: int, capacity: int, seed: int = 0) -> np.ndarray:
 
 
 def main() -> None:
-    print(f"jax {jax.__version__}, {jax.devices()[0].platform}; medians of 50 calls, ms")
+    print(f"{_run.machine()}; medians of 50 interleaved calls, ms")
     print("| rows | keys | sort (stable_order) | one-hot cumsum | masked cumsums | one-hot scan |")
     print("|---:|---:|---:|---:|---:|---:|")
     for num_rows in (8_192, 81_920, 655_360):
@@ -91,13 +96,10 @@ def main() -> None:
             want = np.asarray(forms["sort"](keys))
             for name, form in forms.items():
                 np.testing.assert_array_equal(np.asarray(form(keys)), want, err_msg=name)
-            times = {name: [] for name in forms}
-            for _ in range(50):
-                for name, form in forms.items():
-                    start = time.perf_counter()
-                    form(keys).block_until_ready()
-                    times[name].append(time.perf_counter() - start)
-            cells = " | ".join(f"{1e3 * np.median(times[name]):.3f}" for name in forms)
+            timings = time_interleaved(
+                {name: (form, (keys,)) for name, form in forms.items()}, repeats=50
+            )
+            cells = " | ".join(f"{1e3 * timing.median_s:.3f}" for timing in timings.values())
             print(f"| {num_rows:,} | {num_keys} | {cells} |")
 
 
