@@ -204,7 +204,13 @@ def kernels(jitted, args) -> int:
     """Thunks the CPU runtime runs for one call: instructions of the entry
     computation and of every branch, loop body and called computation, less
     those that run nothing (fusion bodies are one kernel; loop bodies counted once)."""
-    text = re.sub(r"/\*.*?\*/", "", jitted.lower(*args).compile().as_text())
+    return len(kernel_lines(jitted.lower(*args).compile().as_text())[0])
+
+
+def kernel_lines(text: str) -> tuple[list[str], dict[str, list[str]]]:
+    """``kernels``' thunks as the lines of the optimised HLO ``text`` that make
+    them, and every computation's lines by name (a fusion's body among them)."""
+    text = re.sub(r"/\*.*?\*/", "", text)
     bodies, name = {}, None
     for line in text.splitlines():
         head = re.match(r"^(?:ENTRY )?%(\S+) .*\{$", line)
@@ -215,7 +221,7 @@ def kernels(jitted, args) -> int:
                 entry = name
         elif name and re.match(r"^\s+(ROOT )?%", line):
             bodies[name].append(line)
-    count, todo, seen = 0, [entry], set()
+    made, todo, seen = [], [entry], set()
     while todo:
         computation = todo.pop()
         if computation in seen:
@@ -229,8 +235,8 @@ def kernels(jitted, args) -> int:
                 for found in re.findall(attrs, line):
                     todo += re.findall(r"%([\w.-]+)", found)
             elif opcode and opcode not in _FREE:
-                count += 1
-    return count
+                made.append(line)
+    return made, bodies
 
 
 # The stage each library function belongs to, for attributing a thunk by its call stack.

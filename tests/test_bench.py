@@ -324,3 +324,21 @@ def test_paper_test1_rows():
     assert "0 rows differ" in rows[2]["note"]  # swept against the float64 brute force
     assert "0 rows differ" in rows[3]["note"]  # bucket_swept (sized), likewise
     assert "| all_to_all |" in paper_tests.averages(rows)
+
+
+def test_compile_ops_sorts_a_programs_kernels_by_kind():
+    """benchmarks/compile_ops.py's census: a reduction, a gather and a sort, each found."""
+    import jax
+    import jax.numpy as jnp
+
+    compile_ops = _benchmark_module("compile_ops")
+    x, index = np.linspace(0.0, 1.0, 64, dtype=np.float32), np.arange(64, dtype=np.int32)[::-1]
+
+    def program(x, index):
+        return jnp.max(x * 2.0), x[index] * 3.0, jnp.sort(x[:40])
+
+    text = jax.jit(program).lower(x, index).compile().as_text()
+    found, bodies = compile_ops.kernel_lines(text)
+    kinds = {compile_ops.kind_of(line, bodies) for line in found}
+    assert {"gather + elementwise", "sort"} <= kinds, kinds
+    assert kinds & {"reduction to a scalar", compile_ops.WINDOW}, kinds
