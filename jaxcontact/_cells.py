@@ -102,7 +102,7 @@ class CellLists(NamedTuple):
     """Each query point's candidate segments, as a slice of the sorted entries.
 
     O(S + E) memory: the (S, capacity) table of candidates is never built;
-    ``segment_in_slot`` reads one column of it at a time.
+    ``segments_in_slots`` reads a block of its columns at a time.
     """
 
     first: Array  # i32[S]  first entry of the point's cell
@@ -115,12 +115,12 @@ def cell_lists(cells: Array, bins: Bins) -> CellLists:
     return CellLists(bins.start[cells], bins.count[cells], bins.order)
 
 
-def segment_in_slot(lists: CellLists, slot) -> Array:
-    """i32[S]: each point's ``slot``-th candidate segment, -1 past the end of its list."""
+def segments_in_slots(lists: CellLists, slots: Array) -> Array:
+    """i32[S, B]: each point's candidate segments in ``slots`` (i32[B]), -1 past its list."""
     if lists.order.shape[0] == 0:
-        return jnp.full(lists.first.shape, -1, jnp.int32)
-    entry = jnp.minimum(lists.first + slot, lists.order.shape[0] - 1)
-    return jnp.where(slot < lists.count, lists.order[entry], -1)
+        return jnp.full(lists.first.shape + slots.shape, -1, jnp.int32)
+    entry = jnp.minimum(lists.first[:, None] + slots[None, :], lists.order.shape[0] - 1)
+    return jnp.where(slots[None, :] < lists.count[:, None], lists.order[entry], -1)
 
 
 def list_candidates(query: Array, ok: Array, segments: Segments, boxes: Box, sizes: Sizes):

@@ -80,8 +80,53 @@ def lowest_score(
         visit_first = functools.partial(visit, first=first)
         return jax.lax.fori_loop(0, block, visit_first, carry, unroll=True), None
 
+    carry = _over_blocks(visit_block, (best, choice), num_blocks, block, steps_needed)
+    return carry[1], carry[0]
+
+
+def lowest_in_blocks(
+    score_block, num_steps: int, num_rows: int, dtype, *, block: int = BLOCK, steps_needed=None
+) -> tuple[Array, Array]:
+    """``lowest_score``'s answer, each block's steps scored at once.
+
+    ``score_block(steps)`` takes i32[B] step indices (in range) and returns
+    ``(value f[N, B], segment i32[N, B])``. A block is reduced along its
+    rows (``argmin``: the first of equal values, the earlier step, as the
+    running minimum takes it; NaN and steps past ``num_steps`` are no
+    candidate) and merged into the running minimum between blocks. For
+    searches whose steps gather their segments: one gather of a block's
+    segments instead of one per step, and a row reduction in place of the
+    unrolled minimum (measured cheaper to compile: ``benchmarks/compile_ops.py``).
+    ``steps_needed`` as in ``lowest_score``.
+    """
+    choice = jnp.full((num_rows,), -1, jnp.int32)
+    best = jnp.full((num_rows,), jnp.inf, dtype)
+    if num_steps == 0 or num_rows == 0:
+        return choice, best
+    block = min(block, num_steps)
+    num_blocks = -(-num_steps // block)
+
+    def visit_block(carry, first):
+        best, choice = carry
+        steps = first + jnp.arange(block, dtype=jnp.int32)
+        values, segments = score_block(jnp.minimum(steps, num_steps - 1))
+        real = (steps < num_steps)[None, :] & ~jnp.isnan(values)
+        values = jnp.where(real, values, jnp.inf).astype(dtype)
+        at = jnp.argmin(values, axis=1)
+        value = jnp.take_along_axis(values, at[:, None], axis=1)[:, 0]
+        segment = jnp.take_along_axis(segments, at[:, None], axis=1)[:, 0]
+        better = value < best
+        return (jnp.where(better, value, best), jnp.where(better, segment, choice)), None
+
+    carry = _over_blocks(visit_block, (best, choice), num_blocks, block, steps_needed)
+    return carry[1], carry[0]
+
+
+def _over_blocks(visit_block, carry, num_blocks: int, block: int, steps_needed):
+    """``carry`` through ``visit_block(carry, first step)`` for each block: one
+    block inline, a ``lax.scan`` over all, or a ``lax.while_loop`` over the
+    blocks ``steps_needed`` reaches."""
     firsts = jnp.arange(num_blocks, dtype=jnp.int32) * block
-    carry = (best, choice)
     if num_blocks == 1:
         carry, _ = visit_block(carry, firsts[0])
     elif steps_needed is None:
@@ -96,7 +141,7 @@ def lowest_score(
         _, carry = jax.lax.while_loop(
             lambda state: state[0] < blocks_needed, step, (jnp.zeros((), jnp.int32), carry)
         )
-    return carry[1], carry[0]
+    return carry
 
 
 def one_scene_at_a_time(fn):

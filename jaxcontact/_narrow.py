@@ -15,10 +15,10 @@ import jax
 import jax.numpy as jnp
 
 from jaxcontact._broad import Box
-from jaxcontact._cells import CellLists, list_candidates, segment_in_slot
+from jaxcontact._cells import CellLists, list_candidates, segments_in_slots
 from jaxcontact._geometry import Edge, edge
 from jaxcontact._inputs import Segments
-from jaxcontact._lowest import UNROLL, lowest_score
+from jaxcontact._lowest import UNROLL, lowest_in_blocks, lowest_score
 from jaxcontact._pairs import pick
 from jaxcontact._sizes import Sizes
 from jaxcontact._sort import stable_order
@@ -82,26 +82,33 @@ def _search_rows(pair_value, segments: Segments, listed: CellLists, capacity: in
     """``(i32[S], f[S])``: each row against the segments of its list, up to the
     fullest list's length; the choice and its score."""
 
-    def score(slot):
-        segment = segment_in_slot(listed, slot)
+    def score_block(slots):
+        # A block of slots at once: one gather of their segments and ends,
+        # f[S, B] values. Computed per row from the gathered ends: the same
+        # numbers as a dense search's, so both score a pair alike.
+        segment = segments_in_slots(listed, slots)
         index = jnp.maximum(segment, 0)
-        # Computed per row from the gathered ends: the same numbers as a
-        # dense search's, so both score a pair alike.
-        value = pair_value(
+        value = jax.vmap(pair_value, in_axes=1, out_axes=1)(
             (edge(segments.start[index], segments.end[index]), pick(segments.tags, index))
         )
         # Reused lists may name a segment masked or degenerate since.
         listed_ok = (segment >= 0) & segments.ok[index]
         return jnp.where(listed_ok, value, jnp.inf), segment
 
-    # Each cell lists its segments in increasing order. Per-slot gathers make
-    # the unrolled loop slow to compile and to run: scan blocks of 8 (measured
-    # 3x faster to compile and 1.3-1.7x faster to run on the cutting scene).
+    # Each cell lists its segments in increasing order, so a block's first
+    # lowest slot is the lower segment, as the running minimum takes it.
+    # Blocks of 8 slots, each gathered at once and reduced along its rows:
+    # one slot at a time (an unrolled running minimum, a gather per slot)
+    # made 47 more kernels of the binned closest step, which compiled 1.6x
+    # slower (6.3 against 3.9 s pinned) with the same answers bit for bit;
+    # the rough die ran 1.3x slower that way, the cutting scene alike
+    # (pinned: compile_probe.py's programs, and Search.closest on the cutting
+    # scene at 10^4 and 81,939 nodes and the rough die at 10^5 x 10^4).
     # Every row runs as many slots as the fullest list among them needs, not
     # the capacity in the sizes (measured 1.3x faster on the rough die).
     fullest = jnp.max(listed.count, initial=0)
-    return lowest_score(
-        score, capacity, listed.first.shape[0], dtype, unroll=8, steps_needed=fullest
+    return lowest_in_blocks(
+        score_block, capacity, listed.first.shape[0], dtype, steps_needed=fullest
     )
 
 
