@@ -99,11 +99,11 @@ def _search_rows(pair_value, segments: Segments, listed: CellLists, capacity: in
     # lowest slot is the lower segment, as the running minimum takes it.
     # Blocks of 8 slots, each gathered at once and reduced along its rows:
     # one slot at a time (an unrolled running minimum, a gather per slot)
-    # made 47 more kernels of the binned closest step, which compiled 1.6x
-    # slower (6.3 against 3.9 s pinned) with the same answers bit for bit;
-    # the rough die ran 1.3x slower that way, the cutting scene alike
-    # (pinned: compile_probe.py's programs, and Search.closest on the cutting
-    # scene at 10^4 and 81,939 nodes and the rough die at 10^5 x 10^4).
+    # made 47 more kernels of the binned closest step, which compiled 1.5x
+    # slower (5.9 against 3.9 s pinned, benchmarks/compile_probe.py) with
+    # the same answers bit for bit. Run time did not change beyond noise in
+    # benchmarks/targets.py (both cores); one pinned A/B had the rough die
+    # at 10^5 x 10^4 at 28 against 37 ms.
     # Every row runs as many slots as the fullest list among them needs, not
     # the capacity in the sizes (measured 1.3x faster on the rough die).
     fullest = jnp.max(listed.count, initial=0)
