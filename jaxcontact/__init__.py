@@ -14,8 +14,9 @@ from jaxcontact._track import track as track
 from jaxcontact._types import Contact as Contact
 from jaxcontact._types import ContactList as ContactList
 from jaxcontact._types import Crossing as Crossing
+from jaxcontact._types import CrossingList as CrossingList
 from jaxcontact._types import Surface as Surface
 from jaxcontact._validate import validate as validate
 from jaxcontact.forces import contact_forces as contact_forces
 
-__version__ = "0.6.2"
+__version__ = "0.7.0"

@@ -43,12 +43,14 @@ from jaxcontact._padded import cut_entries, cut_rows, pad_contact_scene, pad_sce
 from jaxcontact._pairs import NO_PAIRING, Pairing, pick, ruled, tag
 from jaxcontact._placement import searched_whole
 from jaxcontact._sizes import CELLS_ABOVE, Sizes, grow, measure
-from jaxcontact._types import Array, Contact, ContactList, Crossing, Surface
+from jaxcontact._types import Array, Contact, ContactList, Crossing, CrossingList, Surface
 from jaxcontact._writeback import (
     empty_contact,
     empty_contact_list,
     empty_crossing,
+    empty_crossing_list,
     first_slots,
+    pack_crossed,
     pack_found,
     write_blocks,
 )
@@ -303,9 +305,7 @@ def _contact(
         result = _search_kept(queries, blocks, segments, boxes, listed, how)
         return result._replace(overflow=result.overflow | overflow)
     # The compact form assembles only the kept slaves that can be found, then
-    # packs the found ones: two stages, so that XLA does not fuse the pair
-    # evaluation into each field's gather and run it once per field (measured
-    # 2x slower at 81,939 rows).
+    # packs the found ones (``_compact_stages``).
     go, chosen = _searched(queries, blocks, segments, boxes, listed, how)
 
     def assemble_near(chosen):
@@ -314,26 +314,51 @@ def _contact(
         )
 
     ruling = (rule, kept_tags)
+    stages = (assemble_near, pack_found, empty_contact)
+    return _compact_stages(go, chosen, stages, nothing, num_rows, overflow, with_needed)
 
-    def pack(near):
-        part, rows, needed = near
-        return pack_found(part, rows, compact, num_rows), needed
 
-    skipped = (empty_contact(jnp.zeros((compact, 2), x.dtype), no_overflow),)
-    skipped += (jnp.full((compact,), num_rows, jnp.int32), jnp.zeros((), jnp.int32))
-    result, needed = in_stages(go, [assemble_near, pack], [skipped, nothing], chosen)
+def _compact_stages(go, chosen, stages, nothing, num_rows: int, overflow, with_needed: bool):
+    """The compact forms' result: ``assemble(chosen) -> (part, rows, needed)``
+    on at most K kept slots, then ``pack(part, rows, K, N)`` into K entries;
+    each stage skipped unless ``go`` (``in_stages``), ``empty`` making the
+    skipped part and ``nothing`` the skipped ``(entries, needed)``. Apart, so
+    that XLA does not fuse the pair evaluation into each field's gather and
+    run it once per field (measured 2x slower at 81,939 rows)."""
+    assemble, pack, empty = stages
+    capacity, dtype = nothing[0].node.shape[0], nothing[0].point.dtype
+    skipped = (empty(jnp.zeros((capacity, 2), dtype), jnp.zeros((), bool)),)
+    skipped += (jnp.full((capacity,), num_rows, jnp.int32), jnp.zeros((), jnp.int32))
+
+    def packed(part_rows_needed):
+        part, rows, needed = part_rows_needed
+        return pack(part, rows, capacity, num_rows), needed
+
+    result, needed = in_stages(go, [assemble, packed], [skipped, nothing], chosen)
     result = result._replace(overflow=result.overflow | overflow)
     return (result, needed) if with_needed else result
 
 
 @searched_whole(rows="x")
-def _crossing(x_prev, x, surface, mask, sizes: Sizes, pairing: Pairing = NO_PAIRING):
+def _crossing(
+    x_prev, x, surface, mask, sizes: Sizes, pairing: Pairing = NO_PAIRING, with_needed=False
+):
+    """The sized swept bucket sort: a ``Crossing``, or a ``CrossingList``
+    where the sizes have a ``contact_capacity`` (then with ``with_needed``,
+    also the entries it needed: ``measure_crossings``)."""
     slave_ok = _inputs.paths_ok(x_prev, x, mask)
     segments = _inputs.resolve_segments(surface)
     lengths = jnp.where(slave_ok, path_lengths(x_prev, x), 0)
     rule, tags, segments = tag(pairing, segments, surface.body, lengths)
+    compact, num_rows = sizes.contact_capacity, x.shape[0]
+    no_overflow = jnp.zeros((), bool)
+    if compact:
+        nothing = empty_crossing_list(compact, num_rows, x.dtype, no_overflow)
+        nothing = (nothing, jnp.zeros((), jnp.int32))
     if x.shape[0] == 0 or segments.ok.shape[0] == 0:
-        return empty_crossing(x, jnp.zeros((), bool))
+        if compact:
+            return nothing if with_needed else nothing[0]
+        return empty_crossing(x, no_overflow)
     # A path meets a segment only if their boxes meet.
     path_low, path_high = jnp.minimum(x_prev, x), jnp.maximum(x_prev, x)
     no_reach = jnp.zeros((), x.dtype)
@@ -353,14 +378,34 @@ def _crossing(x_prev, x, surface, mask, sizes: Sizes, pairing: Pairing = NO_PAIR
 
     how = _How(ruled(first_hit_time, rule), sizes, assemble, empty_crossing, x.shape[0])
     queries = Queries((start, end, kept_tags), start, ok)
-    result = _search_kept(queries, blocks, segments, boxes, None, how)
-    return result._replace(overflow=result.overflow | blocks.overflow)
+    if not compact:
+        result = _search_kept(queries, blocks, segments, boxes, None, how)
+        return result._replace(overflow=result.overflow | blocks.overflow)
+    # The compact form assembles only the kept paths the search chose a
+    # segment for, then packs the crossed ones (``_compact_stages``).
+    go, chosen = _searched(queries, blocks, segments, boxes, None, how)
+
+    def assemble_chosen(chosen):
+        (choice, _), overflow = chosen
+        at, valid, needed = first_slots(ok & (choice >= 0), compact)
+        part = crossing_from_choice(
+            jnp.where(valid[:, None], start[at], 0),
+            jnp.where(valid[:, None], end[at], 0),
+            segments,
+            jnp.where(valid, choice[at], -1),
+            overflow | (needed > compact),
+            valid,
+        )
+        return part, jnp.where(valid, blocks.rows[at], num_rows), needed
+
+    stages = (assemble_chosen, pack_crossed, empty_crossing)
+    return _compact_stages(go, chosen, stages, nothing, num_rows, blocks.overflow, with_needed)
 
 
 # One program per shape and sizes, called plainly or inlined under jit.
 find_jit = jax.jit(find, static_argnames="sizes")
 contact_jit = jax.jit(_contact, static_argnames=("sizes", "with_needed"))
-crossing_jit = jax.jit(_crossing, static_argnames="sizes")
+crossing_jit = jax.jit(_crossing, static_argnames=("sizes", "with_needed"))
 
 
 def sized_bucket_sort(
@@ -427,8 +472,25 @@ def measure_contacts(
     return dataclasses.replace(sizes, contact_capacity=grow(needed, slack))
 
 
-def sized_bucket_swept(x_prev, x, surface, *, mask=None, sizes: Sizes, **pair_keywords) -> Crossing:
-    """``bucket_swept`` at given ``Sizes``, inputs checked; as ``sized_bucket_sort``."""
+def crossings_needed(x_prev, x, surface, mask, sizes: Sizes, pairing=NO_PAIRING) -> Array:
+    """i32[]: the entries the compact swept form needs for this data (the
+    paths the search chose a segment for), as ``entries_needed``."""
+    wide = room_for_every_slot(sizes)
+    return crossing_jit(x_prev, x, surface, mask, sizes=wide, with_needed=True, pairing=pairing)[1]
+
+
+def measure_crossings(x_prev, x, surface, mask, sizes: Sizes, slack: float, pairing) -> Sizes:
+    """``sizes`` (for paths) with the compact swept form's capacity: the
+    entries needed now times ``slack`` (at least 1), as ``measure_contacts``."""
+    needed = int(crossings_needed(x_prev, x, surface, mask, sizes, pairing))
+    return dataclasses.replace(sizes, contact_capacity=grow(needed, slack))
+
+
+def sized_bucket_swept(
+    x_prev, x, surface, *, mask=None, sizes: Sizes, **pair_keywords
+) -> Crossing | CrossingList:
+    """``bucket_swept`` at given ``Sizes``, inputs checked; as ``sized_bucket_sort``
+    (a ``CrossingList`` where the sizes have a ``contact_capacity``)."""
     x_prev, x, mask = _inputs.check_path_inputs(x_prev, x, mask)
     surface = _inputs.check_surface(surface, x.dtype)
     pairing = _check_pairing(pair_keywords, x, surface, mask)
@@ -529,10 +591,11 @@ def bucket_swept(
     surface: Surface,
     *,
     mask: Array | None = None,
+    compact: bool = False,
     slave_node: Array | None = None,
     slave_body: Array | None = None,
     self_contact: bool = False,
-) -> Crossing:
+) -> Crossing | CrossingList:
     """First crossing of every slave's path with the master, by bucket sort.
 
     The broad phase works on the boxes of the paths ``x_prev -> x``; the cells
@@ -544,10 +607,13 @@ def bucket_swept(
       x: f[N, 2] current slave positions.
       surface: the master ``Surface``.
       mask: optional bool[N], False for padding slaves.
+      compact: return the crossed paths only, as a ``CrossingList`` with an
+        entry for every path the broad phase kept (``Search(compact=True)``
+        measures a tighter capacity once and reuses it).
       slave_node, slave_body, self_contact: the pair rule, as for ``swept``.
 
     Returns:
-      A ``Crossing`` equal to ``swept``'s.
+      A ``Crossing`` equal to ``swept``'s, or its ``CrossingList``.
     """
     x_prev, x, mask = _inputs.check_path_inputs(x_prev, x, mask)
     surface = _inputs.check_surface(surface, x_prev.dtype)
@@ -556,5 +622,7 @@ def bucket_swept(
     use_cells = surface.segments.shape[0] > CELLS_ABOVE
     (x_prev, x), mask, surface, pairing, num_rows = pad_scene((x_prev, x), mask, surface, pairing)
     sizes = measure(x, surface, x_prev=x_prev, mask=mask, use_cells=use_cells)
+    if compact:
+        sizes = room_for_every_slot(sizes)
     crossing = crossing_jit(x_prev, x, surface, mask, sizes=sizes, pairing=pairing)
-    return cut_rows(crossing, num_rows)
+    return cut_entries(crossing, num_rows) if compact else cut_rows(crossing, num_rows)

@@ -168,12 +168,14 @@ def cut_rows(result, num_rows: int | None):
 
 
 def cut_entries(entries, num_rows: int | None):
-    """A ``ContactList`` of padded rows with its padding entries naming ``num_rows``."""
+    """A ``ContactList`` or ``CrossingList`` of padded rows with its padding
+    entries naming ``num_rows``."""
     if num_rows is None:
         return entries
+    real = entries.found if hasattr(entries, "found") else entries.crossed
     if not _on_cpu(entries):
-        return entries._replace(node=_renamed(entries.node, entries.found, num_rows))
-    node = np.where(np.asarray(entries.found), np.asarray(entries.node), num_rows)
+        return entries._replace(node=_renamed(entries.node, real, num_rows))
+    node = np.where(np.asarray(real), np.asarray(entries.node), num_rows)
     return entries._replace(node=jax.device_put(node.astype(np.int32)))
 
 

@@ -26,7 +26,7 @@ from jaxcontact._pairs import Pairing
 from jaxcontact._placement import replicated, searched_whole
 from jaxcontact._sizes import CELLS_ABOVE, CHUNK_ROWS, Sizes, largest, measure, measure_batch
 from jaxcontact._track import Slip
-from jaxcontact._types import Array, Contact, ContactList, Crossing, Surface
+from jaxcontact._types import Array, Contact, ContactList, Crossing, CrossingList, Surface
 
 METHODS = ("auto", "binned", "dense", "exhaustive")
 # What ``closest`` returns: the slip too with ``track=True``.
@@ -160,7 +160,10 @@ class Search:
         ``slack``), instead of a ``Contact`` of N rows.
         Faster where few slaves touch (the N rows are never written), and
         what a force assembly by ``segment_sum`` over the contacts wants.
-        Not for the ``"exhaustive"`` method, nor for ``swept``.
+        Likewise ``swept`` returns the crossed paths only, as a
+        ``CrossingList`` whose capacity ``allocate(..., x_prev=)`` measures
+        (the paths crossing then times ``slack``). Not for the
+        ``"exhaustive"`` method.
       self_contact: slaves also pair with their own body's segments outside
         their neighbourhood along the outline (``all_to_all``'s
         ``self_contact``); the calls then need ``slave_node=``.
@@ -294,6 +297,12 @@ class Search:
             if x_prev is not None:
                 path_sizes = measure(x, pooled, x_prev=x_prev, mask=mask, **self._sizing)
                 path_sizes = self._merged(path_sizes, at_least, "path_sizes")
+                path_sizes = dataclasses.replace(path_sizes, contact_capacity=0)
+                if self.compact:
+                    path_sizes = _bucket.measure_crossings(
+                        x_prev, x, surface, mask, path_sizes, self.slack, pairing
+                    )
+                    path_sizes = self._merged(path_sizes, at_least, "path_sizes")
         state = self._state(sizes, path_sizes, candidates, overflow, (), x)
         return _kept_history(state, at_least)
 
@@ -341,6 +350,9 @@ class Search:
             if x_prev is not None:
                 path_sizes = measure_batch(x, pooled, x_prev=x_prev, mask=mask, **self._sizing)
                 path_sizes = self._merged(path_sizes, at_least, "path_sizes")
+                path_sizes = dataclasses.replace(path_sizes, contact_capacity=0)
+                if self.compact:  # a batch is not searched for paths (swept): room for all
+                    path_sizes = _bucket.room_for_every_slot(path_sizes)
         state = self._state(sizes, path_sizes, candidates, overflow, x.shape[:1], x)
         return _kept_history(state, at_least)
 
@@ -500,15 +512,19 @@ class Search:
                 "state has no closest-point sizes: make it with this search's allocate"
             )
         _bucket.check_sizes(state.sizes, x.shape[0], for_paths=False)
-        if bool(state.sizes.contact_capacity) != self.compact:
+        self._check_form(state.sizes)
+        self._check_state(state, x, surface)
+        contact, state = _closest(self, state, x, surface, mask, radius, pairing)
+        return self._finish(contact, state, x, surface)
+
+    def _check_form(self, sizes: Sizes):
+        """A ``ValueError`` when ``sizes`` were made for the other form (compact or dense)."""
+        if bool(sizes.contact_capacity) != self.compact:
             made, wanted = (("compact", "dense"), ("dense", "compact"))[self.compact]
             raise ValueError(
                 f"state was allocated by a {made} search; this one is {wanted}: "
                 "allocate with this search"
             )
-        self._check_state(state, x, surface)
-        contact, state = _closest(self, state, x, surface, mask, radius, pairing)
-        return self._finish(contact, state, x, surface)
 
     def _finish(self, contact, state: SearchState, x, surface: Surface):
         """Smooth normals and the slip history, where this search asks for them."""
@@ -554,12 +570,15 @@ class Search:
         mask: Array | None = None,
         slave_node: Array | None = None,
         slave_body: Array | None = None,
-    ) -> tuple[Crossing, SearchState]:
+    ) -> tuple[Crossing | CrossingList, SearchState]:
         """The first crossing of every slave's path ``x_prev -> x`` with the master.
 
         Returns:
           ``(crossing, state)``; ``crossing`` equals ``swept(x_prev, x,
           surface, mask=mask, ...)`` whenever ``crossing.overflow`` is False.
+          A compact search returns a ``CrossingList`` instead, whose
+          entries are the crossed rows of that ``Crossing``
+          (``crossing.to_crossing(N)`` spreads them back).
         """
         pair_keywords = {
             "slave_node": slave_node,
@@ -572,6 +591,7 @@ class Search:
             raise ValueError("state has no path sizes: allocate it with x_prev=")
         _check_unbatched(state, "swept")
         sizes = state.path_sizes
+        self._check_form(sizes)
         crossing = _bucket.sized_bucket_swept(
             x_prev, x, surface, mask=mask, sizes=sizes, **pair_keywords
         )

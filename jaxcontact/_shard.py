@@ -98,7 +98,7 @@ def sharded(detector, mesh: Mesh, *, axis: str | None = None):
     def run(*args, mask: Array | None = None, **kwargs):
         if kwargs.get("compact"):
             raise ValueError(
-                "sharded(...) returns the dense Contact: compact=True is not supported "
+                "sharded(...) returns the dense Contact or Crossing: compact=True is not supported "
                 "(search the sharded arrays with Search(compact=True) instead)"
             )
         per_row = [k for k in ("slave_node", "slave_body") if kwargs.get(k) is not None]

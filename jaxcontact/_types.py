@@ -61,6 +61,13 @@ class Contact(NamedTuple):
     overflow: Array  # bool[]  a fixed capacity was too small; a contact may be missing
 
 
+def _spread(values: Array, node: Array, num_rows: int, empty) -> Array:
+    """Entries' ``values`` put at rows ``node`` of ``num_rows`` rows of ``empty``
+    (entries naming row ``num_rows``, the padding, are dropped)."""
+    shape = (num_rows,) + values.shape[1:]
+    return jnp.full(shape, empty, values.dtype).at[node].set(values, mode="drop")
+
+
 class ContactList(NamedTuple):
     """The found contacts only, packed into a fixed number of entries.
 
@@ -93,8 +100,7 @@ class ContactList(NamedTuple):
         """The dense ``Contact`` of ``num_rows`` slaves (N, static) these entries describe."""
 
         def put(values, empty):
-            shape = (num_rows,) + values.shape[1:]
-            return jnp.full(shape, empty, values.dtype).at[self.node].set(values, mode="drop")
+            return _spread(values, self.node, num_rows, empty)
 
         return Contact(
             gap=put(self.gap, 0),
@@ -120,3 +126,40 @@ class Crossing(NamedTuple):
     point: Array  # f[N, 2]  where the path meets the segment: x_prev + t (x - x_prev)
     crossed: Array  # bool[N]  the path meets a real segment
     overflow: Array  # bool[]  a fixed capacity was too small; a crossing may be missing
+
+
+class CrossingList(NamedTuple):
+    """The crossed paths only, packed into a fixed number of entries.
+
+    The compact form of ``Crossing``, as ``ContactList`` is of ``Contact``:
+    entry ``j`` says that the path of slave ``node[j]`` first meets segment
+    ``segment[j]`` at ``t[j]``, with the values of row ``node[j]`` of the
+    ``Crossing`` (equal to rounding: the last bit may differ). Crossed entries
+    come first, in increasing ``node``; the entries after them are padding:
+    ``node = N``, ``segment = -1``, ``t = 0``, ``point = 0``, ``crossed``
+    False. The capacity ``K`` is static (``Search(compact=True)`` measures it
+    at ``allocate`` with ``x_prev``); ``overflow`` is True when more entries
+    were needed than it holds (the paths the search chose a segment for),
+    and then some crossings may be missing.
+    """
+
+    node: Array  # i32[K]  slave row of each entry; N in padding entries
+    t: Array  # f[K]  path parameter of the first crossing, in [0, 1]
+    segment: Array  # i32[K]  crossed segment, -1 in padding entries
+    point: Array  # f[K, 2]  where the path meets the segment
+    crossed: Array  # bool[K]  the entry holds a crossing (False: padding)
+    overflow: Array  # bool[]  more crossings than entries: some are missing
+
+    def to_crossing(self, num_rows: int) -> Crossing:
+        """The dense ``Crossing`` of ``num_rows`` slaves (N, static) these entries describe."""
+
+        def put(values, empty):
+            return _spread(values, self.node, num_rows, empty)
+
+        return Crossing(
+            t=put(self.t, 0),
+            segment=put(self.segment, -1),
+            point=put(self.point, 0),
+            crossed=put(self.crossed, False),
+            overflow=self.overflow,
+        )

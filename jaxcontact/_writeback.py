@@ -11,7 +11,7 @@ import jax
 import jax.numpy as jnp
 
 from jaxcontact._broad import Blocks
-from jaxcontact._types import Array, Contact, ContactList, Crossing
+from jaxcontact._types import Array, Contact, ContactList, Crossing, CrossingList
 
 
 def empty_contact(x: Array, overflow: Array) -> Contact:
@@ -75,8 +75,7 @@ def pack_found(result: Contact, rows: Array, capacity: int, num_rows: int) -> Co
     at, valid, count = first_slots(result.found, capacity)
 
     def take(values, fill):
-        shape = valid.shape + (1,) * (values.ndim - 1)
-        return jnp.where(valid.reshape(shape), values[at], fill)
+        return _taken(values, at, valid, fill)
 
     return ContactList(
         node=jnp.where(valid, rows[at], num_rows).astype(jnp.int32),
@@ -88,6 +87,40 @@ def pack_found(result: Contact, rows: Array, capacity: int, num_rows: int) -> Co
         vertex=take(result.vertex, -1),
         found=valid,
         active=take(result.active, False),
+        overflow=result.overflow | (count > capacity),
+    )
+
+
+def _taken(values: Array, at: Array, valid: Array, fill) -> Array:
+    """``values[at]`` where ``valid``, else ``fill`` (entries past the last)."""
+    shape = valid.shape + (1,) * (values.ndim - 1)
+    return jnp.where(valid.reshape(shape), values[at], fill)
+
+
+def empty_crossing_list(capacity: int, num_rows: int, dtype, overflow: Array) -> CrossingList:
+    """``capacity`` padding entries of the compact swept form (slaves ``num_rows``)."""
+    return CrossingList(
+        node=jnp.full((capacity,), num_rows, jnp.int32),
+        t=jnp.zeros((capacity,), dtype),
+        segment=jnp.full((capacity,), -1, jnp.int32),
+        point=jnp.zeros((capacity, 2), dtype),
+        crossed=jnp.zeros((capacity,), bool),
+        overflow=overflow,
+    )
+
+
+def pack_crossed(result: Crossing, rows: Array, capacity: int, num_rows: int) -> CrossingList:
+    """The ``crossed`` rows of ``result`` (a ``Crossing`` of slots whose slave
+    rows are ``rows``, increasing where real) packed into ``capacity``
+    entries, in increasing slot order, as a ``CrossingList``: as
+    ``pack_found`` for contacts."""
+    at, valid, count = first_slots(result.crossed, capacity)
+    return CrossingList(
+        node=jnp.where(valid, rows[at], num_rows).astype(jnp.int32),
+        t=_taken(result.t, at, valid, 0),
+        segment=_taken(result.segment, at, valid, -1),
+        point=_taken(result.point, at, valid, 0),
+        crossed=valid,
         overflow=result.overflow | (count > capacity),
     )
 

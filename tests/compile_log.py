@@ -6,7 +6,8 @@ and per jitted function how many programs it compiled and in how many xdist
 workers (many programs of one function: candidates for a shared shape).
 Counts come from ``jax.monitoring``'s backend-compile event; programs loaded
 from a persistent compilation cache (``JAX_COMPILATION_CACHE_DIR``) are
-counted apart.
+counted apart. ``JAXCONTACT_COMPILE_LOG_KEEP=rows.json`` also keeps every
+compile's row (worker, test, program, seconds, loaded from the cache) as JSON.
 """
 
 from __future__ import annotations
@@ -78,6 +79,10 @@ def pytest_terminal_summary(terminalreporter, config):
         with open(os.path.join(folder, name)) as stream:
             rows += json.load(stream)
     shutil.rmtree(folder, ignore_errors=True)
+    keep = os.environ.get("JAXCONTACT_COMPILE_LOG_KEEP")
+    if keep:  # every compile's row, as JSON, for a closer look
+        with open(keep, "w") as stream:
+            json.dump(rows, stream)
     write = terminalreporter.write_line
     total = sum(row[3] for row in rows)
     hits = sum(row[4] for row in rows)

@@ -14,33 +14,58 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxcontact import ContactList, Search, Surface, all_to_all, bucket_sort, sharded
+from jaxcontact import (
+    ContactList,
+    CrossingList,
+    Search,
+    Surface,
+    all_to_all,
+    bucket_sort,
+    bucket_swept,
+    sharded,
+    swept,
+)
 from jaxcontact._bucket import contact_jit
 from jaxcontact.scenes import cutting_scene, rough_die_scene
-from tests.helpers import FLOAT, assert_same_contact, binned_tolerance, gradient_atol
+from tests.helpers import (
+    FLOAT,
+    assert_same_contact,
+    assert_same_crossing,
+    binned_tolerance,
+    gradient_atol,
+)
 from tests.test_search import NUM_STEPS, RADIUS, SKIN, surface_at, trajectory
 
 
-def assert_packs(entries: ContactList, dense, num_rows: int):
-    """``entries`` hold exactly the found rows of ``dense``, in order, padding after."""
-    assert isinstance(entries, ContactList)
-    found = np.asarray(entries.found)
-    count = int(found.sum())
-    rows = np.flatnonzero(np.asarray(dense.found))
+def _assert_packed(entries, dense, num_rows: int, flag: str, exact, close):
+    """``entries`` hold exactly the ``flag`` rows of ``dense`` (its ``exact``
+    fields equal, its ``close`` ones to rounding), in order, padding after;
+    returns the tolerance."""
+    flags = np.asarray(getattr(entries, flag))
+    count = int(flags.sum())
+    rows = np.flatnonzero(np.asarray(getattr(dense, flag)))
     assert count == rows.size > 0
-    assert found[:count].all() and not found[count:].any()  # found entries first
+    assert flags[:count].all() and not flags[count:].any()  # real entries first
     np.testing.assert_array_equal(entries.node[:count], rows)  # increasing slave rows
-    tol = binned_tolerance(dense.gap.dtype, dense.point)
-    for field in ("segment", "active"):
+    tol = binned_tolerance(dense.point.dtype, dense.point)
+    for field in exact:
         np.testing.assert_array_equal(getattr(entries, field)[:count], getattr(dense, field)[rows])
-    for field in ("gap", "xi", "point", "normal"):
+    for field in close:
         got, want = getattr(entries, field)[:count], getattr(dense, field)[rows]
         np.testing.assert_allclose(got, want, rtol=0, atol=tol)
     # Padding: one past the last slave, no segment, zeros.
     assert (np.asarray(entries.node[count:]) == num_rows).all()
     assert (np.asarray(entries.segment[count:]) == -1).all()
-    for field in ("gap", "xi", "point", "normal"):
+    for field in close:
         assert not np.asarray(getattr(entries, field)[count:]).any()
+    return tol
+
+
+def assert_packs(entries: ContactList, dense, num_rows: int):
+    """``entries`` hold exactly the found rows of ``dense``, in order, padding after."""
+    assert isinstance(entries, ContactList)
+    close = ("gap", "xi", "point", "normal")
+    tol = _assert_packed(entries, dense, num_rows, "found", ("segment", "active"), close)
     # Back to N rows, and a scatter-add over the entries drops the padding.
     for field, want in zip(entries.to_contact(num_rows), dense, strict=True):
         np.testing.assert_allclose(field, want, rtol=0, atol=tol)
@@ -206,3 +231,64 @@ def test_a_batch_is_allocated_once_and_searched_under_vmap():
     for b in range(3):
         got = jax.tree.map(lambda field, b=b: field[b], entries).to_contact(xs.shape[1])
         assert_same_contact(got, jax.tree.map(lambda field, b=b: field[b], dense), RADIUS)
+
+
+# The compact swept form (``CrossingList``): the crossed rows of the dense
+# ``Crossing``, packed, as ``ContactList`` packs the found rows of a ``Contact``.
+
+
+def assert_packs_crossings(entries: CrossingList, dense, num_rows: int):
+    """``entries`` hold exactly the crossed rows of ``dense``, in order, padding after."""
+    assert isinstance(entries, CrossingList)
+    tol = _assert_packed(entries, dense, num_rows, "crossed", ("segment",), ("t", "point"))
+    for field, want in zip(entries.to_crossing(num_rows), dense, strict=True):
+        np.testing.assert_allclose(field, want, rtol=0, atol=tol)
+
+
+def _crossing_scene():
+    """The cutting scene with paths from a tool 0.3 further on: some cross the tool.
+    Three crossing rows are masked and hold NaN (padding holds anything)."""
+    scene = cutting_scene(2_000, 18.0, x_tip_prev=18.3, dtype=FLOAT)
+    crossing = swept(scene.x_prev, scene.x, scene.surface)
+    mask = np.ones(scene.x.shape[0], bool)
+    mask[np.flatnonzero(np.asarray(crossing.crossed))[:3]] = False
+    x = np.where(mask[:, None], np.asarray(scene.x), np.nan).astype(scene.x.dtype)
+    return scene, x, mask
+
+
+def test_one_call_compact_swept_packs_the_crossed_rows():
+    scene, x, mask = _crossing_scene()
+    dense = bucket_swept(scene.x_prev, x, scene.surface, mask=mask)
+    assert_same_crossing(dense, swept(scene.x_prev, x, scene.surface, mask=mask))
+    entries = bucket_swept(scene.x_prev, x, scene.surface, mask=mask, compact=True)
+    assert not bool(entries.overflow)
+    assert_packs_crossings(entries, dense, x.shape[0])
+
+
+def test_search_compact_swept_measures_its_capacity_and_overflows_when_outgrown():
+    scene, x, mask = _crossing_scene()
+    search = Search(radius=scene.radius, compact=True, method="binned")
+    state = search.allocate(x, scene.surface, x_prev=scene.x_prev, mask=mask)
+    dense = swept(scene.x_prev, x, scene.surface, mask=mask)
+    count = int(dense.crossed.sum())
+    # The capacity is measured from the paths that cross, not the paths kept.
+    capacity = state.path_sizes.contact_capacity
+    assert count <= capacity < state.path_sizes.slave_capacity
+    step = jax.jit(lambda state, x: search.swept(state, scene.x_prev, x, scene.surface, mask=mask))
+    entries, after = step(state, x)
+    assert not bool(entries.overflow) and not bool(after.overflow)
+    assert entries.node.shape == (capacity,)
+    assert_same_crossing(entries.to_crossing(x.shape[0]), dense)
+    # Too few entries: the first crossings are kept, and the state says so.
+    small = dataclasses.replace(state.path_sizes, contact_capacity=3)
+    entries, after = search.swept(
+        dataclasses.replace(state, path_sizes=small), scene.x_prev, x, scene.surface, mask=mask
+    )
+    assert bool(entries.overflow) and bool(after.overflow)
+    rows = np.flatnonzero(np.asarray(dense.crossed))[:3]
+    np.testing.assert_array_equal(entries.node, rows)
+    np.testing.assert_array_equal(entries.segment, dense.segment[rows])
+    # A state of the other form is refused, by name.
+    dense_state = Search(radius=scene.radius).allocate(x, scene.surface, x_prev=scene.x_prev)
+    with pytest.raises(ValueError, match="allocated by a dense search; this one is compact"):
+        search.swept(dense_state, scene.x_prev, x, scene.surface)

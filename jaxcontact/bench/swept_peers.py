@@ -4,8 +4,10 @@ Scenes (docs/scenes.md) with motion: the cutting scene with the tool in the
 workpiece (``x_tip = 18``, previous tip 18.2) at 10^4, 81,939 and 10^6
 nodes, the same with the tool clear (20.5, previous 20.7) at 81,939 and
 10^6, and the paper's Tests 1 (n = 286, d = 5) and 2 (n = 250, face length
-20, d = 10). On each, ``swept`` and ``bucket_swept (sized)`` (float32, jit;
-the bucket sort with its ``Sizes`` measured outside the timer) and every peer
+20, d = 10). On each, ``swept``, ``bucket_swept (sized)`` (float32, jit;
+the bucket sort with its ``Sizes`` measured outside the timer), the compact
+form ``Search.swept, compact`` (a jitted ``Search(compact=True).swept`` step
+returning a ``CrossingList``, allocated outside the timer) and every peer
 of ``SWEPT_PEERS`` that is installed run round-robin (``time_interleaved``);
 ``ratio`` is a method's median over ``bucket_swept (sized)``'s.
 
@@ -24,12 +26,13 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxcontact import swept
+from jaxcontact import CrossingList, Search, swept
 from jaxcontact._sizes import measure
 from jaxcontact.bench import _run, baselines, ipc
 from jaxcontact.scenes import cutting_scene, paper_scene
 
 LIBRARY = "bucket_swept (sized)"
+COMPACT = "Search.swept, compact"  # returns a CrossingList: the crossed paths only
 PAIR_BUDGET = 5e7  # NumPy dense: (N, M) float32 temporaries of about 0.2 GB each
 TIE = 1e-9  # two float64 times this close are one time (a shared vertex)
 
@@ -135,6 +138,11 @@ def _methods(scene):
     sizes = measure(scene.x, scene.surface, x_prev=scene.x_prev)
     args = (scene.x_prev, scene.x, scene.surface)
     methods = {"swept": (jax.jit(swept), args), LIBRARY: (_run.sized_crossing(sizes), args)}
+    # The compact form, as a simulation runs it: a Search step (capacity
+    # measured at allocate: the paths crossing then, times the default slack).
+    search = Search(compact=True)
+    state = search.allocate(scene.x, scene.surface, x_prev=scene.x_prev)
+    methods[COMPACT] = (jax.jit(search.swept), (state, *args))
     for name, (_, prepare) in SWEPT_PEERS.items():
         methods[name] = prepare
     return methods
@@ -158,6 +166,9 @@ def run_scene(kind, size, parameters, repeats, slow_s) -> list[dict]:
     }
 
     def check(result):
+        if isinstance(result, tuple) and isinstance(result[0], CrossingList):
+            assert not bool(result[0].overflow)
+            result = result[0].to_crossing(len(x))
         if hasattr(result, "crossed"):
             result = (result.segment, result.t, result.crossed)
         return compare_crossing(result, reference, x_prev, x, start, end)
