@@ -479,10 +479,20 @@ def crossings_needed(x_prev, x, surface, mask, sizes: Sizes, pairing=NO_PAIRING)
     return crossing_jit(x_prev, x, surface, mask, sizes=wide, with_needed=True, pairing=pairing)[1]
 
 
-def measure_crossings(x_prev, x, surface, mask, sizes: Sizes, slack: float, pairing) -> Sizes:
+def measure_crossings(
+    x_prev, x, surface, mask, sizes: Sizes, slack: float, pairing, axes=None
+) -> Sizes:
     """``sizes`` (for paths) with the compact swept form's capacity: the
-    entries needed now times ``slack`` (at least 1), as ``measure_contacts``."""
-    needed = int(crossings_needed(x_prev, x, surface, mask, sizes, pairing))
+    entries needed now times ``slack`` (at least 1), as ``measure_contacts``
+    (``axes``: ``vmap``'s ``in_axes`` of ``x, surface, mask, pairing``; the
+    paths ``x_prev`` are batched as ``x``)."""
+
+    def count(x_prev, x, surface, mask, pairing):
+        return crossings_needed(x_prev, x, surface, mask, sizes, pairing)
+
+    if axes is not None:
+        count = jax.vmap(count, (axes[0], *axes))
+    needed = int(np.max(np.asarray(count(x_prev, x, surface, mask, pairing))))
     return dataclasses.replace(sizes, contact_capacity=grow(needed, slack))
 
 

@@ -267,7 +267,8 @@ class Search:
             overflows nor finds the candidates again; their nodes must be
             where they will be (finite, indices in range) already.
           slave_node, slave_body: the pair rule, as for ``closest``: the
-            compact form's capacity counts the contacts the rule lets through.
+            compact form's capacities count the contacts (and crossings)
+            the rule lets through.
 
         Returns:
           A ``SearchState``. Its sizes are static: each distinct sizes
@@ -292,17 +293,12 @@ class Search:
             if self.radius is not None:
                 sizes = measure(x, pooled, radius=self._reach, mask=mask, **self._sizing)
                 sizes = self._merged(sizes, at_least, "sizes")
-                sizes = self._room(sizes, x, surface, mask, at_least, pairing)
+                sizes = self._room(sizes, x, pooled, mask, at_least, pairing)
                 candidates, overflow = self._find(x, surface, mask, sizes, pool)
             if x_prev is not None:
                 path_sizes = measure(x, pooled, x_prev=x_prev, mask=mask, **self._sizing)
                 path_sizes = self._merged(path_sizes, at_least, "path_sizes")
-                path_sizes = dataclasses.replace(path_sizes, contact_capacity=0)
-                if self.compact:
-                    path_sizes = _bucket.measure_crossings(
-                        x_prev, x, surface, mask, path_sizes, self.slack, pairing
-                    )
-                    path_sizes = self._merged(path_sizes, at_least, "path_sizes")
+                path_sizes = self._path_room(path_sizes, x_prev, x, pooled, mask, at_least, pairing)
         state = self._state(sizes, path_sizes, candidates, overflow, (), x)
         return _kept_history(state, at_least)
 
@@ -340,7 +336,7 @@ class Search:
             if self.radius is not None:
                 sizes = measure_batch(x, pooled, radius=self._reach, mask=mask, **self._sizing)
                 sizes = self._merged(sizes, at_least, "sizes")
-                sizes = self._room(sizes, x, surface, mask, at_least, pairing, axes)
+                sizes = self._room(sizes, x, pooled, mask, at_least, pairing, axes)
 
                 def find(x, surface, mask, pool):
                     return self._find(x, surface, mask, sizes, pool)
@@ -350,9 +346,9 @@ class Search:
             if x_prev is not None:
                 path_sizes = measure_batch(x, pooled, x_prev=x_prev, mask=mask, **self._sizing)
                 path_sizes = self._merged(path_sizes, at_least, "path_sizes")
-                path_sizes = dataclasses.replace(path_sizes, contact_capacity=0)
-                if self.compact:  # a batch is not searched for paths (swept): room for all
-                    path_sizes = _bucket.room_for_every_slot(path_sizes)
+                path_sizes = self._path_room(
+                    path_sizes, x_prev, x, pooled, mask, at_least, pairing, axes
+                )
         state = self._state(sizes, path_sizes, candidates, overflow, x.shape[:1], x)
         return _kept_history(state, at_least)
 
@@ -419,6 +415,16 @@ class Search:
             x, surface, self.radius, mask, sizes, self.slack, axes=axes, pairing=pairing
         )
         return self._merged(measured, at_least, "sizes")
+
+    def _path_room(self, sizes: Sizes, x_prev, x, surface, mask, at_least, pairing, axes=None):
+        """Path ``sizes`` with the compact swept form's capacity (as ``_room``)."""
+        sizes = dataclasses.replace(sizes, contact_capacity=0)
+        if not self.compact:
+            return sizes
+        measured = _bucket.measure_crossings(
+            x_prev, x, surface, mask, sizes, self.slack, pairing, axes=axes
+        )
+        return self._merged(measured, at_least, "path_sizes")
 
     @property
     def _reach(self) -> float:

@@ -94,7 +94,7 @@ class ContactList(NamedTuple):
     vertex: Array  # i32[K]  master node at the closest point when it is an end, else -1
     found: Array  # bool[K]  the entry holds a contact (False: padding)
     active: Array  # bool[K]  found & (gap < 0)
-    overflow: Array  # bool[]  more contacts than entries: some are missing
+    overflow: Array  # bool[]  a capacity (K or another) was too small: a contact may be missing
 
     def to_contact(self, num_rows: int) -> Contact:
         """The dense ``Contact`` of ``num_rows`` slaves (N, static) these entries describe."""
@@ -148,7 +148,7 @@ class CrossingList(NamedTuple):
     segment: Array  # i32[K]  crossed segment, -1 in padding entries
     point: Array  # f[K, 2]  where the path meets the segment
     crossed: Array  # bool[K]  the entry holds a crossing (False: padding)
-    overflow: Array  # bool[]  more crossings than entries: some are missing
+    overflow: Array  # bool[]  a capacity (K or another) was too small: a crossing may be missing
 
     def to_crossing(self, num_rows: int) -> Crossing:
         """The dense ``Crossing`` of ``num_rows`` slaves (N, static) these entries describe."""

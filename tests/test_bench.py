@@ -167,9 +167,9 @@ def test_swept_peer_rows(monkeypatch):
     kind = swept_peers.QUICK_SCENES[0][0]
     rows = swept_peers.run_scene(kind, 500, (18.0, 19.5), repeats=2, slow_s=60)
     by_method = {row["method"]: row for row in rows}
-    assert set(by_method) == {"swept", swept_peers.LIBRARY, "NumPy dense"}
+    assert set(by_method) == {"swept", swept_peers.LIBRARY, swept_peers.COMPACT, "NumPy dense"}
     assert by_method["NumPy dense"]["note"].startswith("skipped")
-    for method in ("swept", swept_peers.LIBRARY):
+    for method in ("swept", swept_peers.LIBRARY, swept_peers.COMPACT):
         row = by_method[method]
         assert row["median_ms"] > 0 and row["runs"] == 2
         assert row["missed"] == row["false"] == row["wrong_segment"] == 0, row

@@ -279,6 +279,8 @@ def test_search_compact_swept_measures_its_capacity_and_overflows_when_outgrown(
     assert not bool(entries.overflow) and not bool(after.overflow)
     assert entries.node.shape == (capacity,)
     assert_same_crossing(entries.to_crossing(x.shape[0]), dense)
+    binned = bucket_swept(scene.x_prev, x, scene.surface, mask=mask)  # the same search, dense
+    assert_packs_crossings(entries, binned, x.shape[0])
     # Too few entries: the first crossings are kept, and the state says so.
     small = dataclasses.replace(state.path_sizes, contact_capacity=3)
     entries, after = search.swept(
@@ -288,7 +290,34 @@ def test_search_compact_swept_measures_its_capacity_and_overflows_when_outgrown(
     rows = np.flatnonzero(np.asarray(dense.crossed))[:3]
     np.testing.assert_array_equal(entries.node, rows)
     np.testing.assert_array_equal(entries.segment, dense.segment[rows])
-    # A state of the other form is refused, by name.
-    dense_state = Search(radius=scene.radius).allocate(x, scene.surface, x_prev=scene.x_prev)
+    # A state of the other form is refused, by name; grown from one, a state
+    # takes this search's form (the capacity measured, or none).
+    dense_search = Search(radius=scene.radius, method="binned")
+    dense_state = dense_search.allocate(x, scene.surface, x_prev=scene.x_prev, mask=mask)
     with pytest.raises(ValueError, match="allocated by a dense search; this one is compact"):
         search.swept(dense_state, scene.x_prev, x, scene.surface)
+    grown = search.allocate(x, scene.surface, x_prev=scene.x_prev, mask=mask, at_least=dense_state)
+    assert grown.path_sizes.contact_capacity == capacity
+    back = dense_search.allocate(x, scene.surface, x_prev=scene.x_prev, mask=mask, at_least=state)
+    assert back.path_sizes.contact_capacity == 0 == back.sizes.contact_capacity
+    # No segments: padding entries only.
+    empty = Surface(scene.surface.nodes, np.zeros((0, 2), np.int32))
+    nothing = bucket_swept(scene.x_prev, x, empty, mask=mask, compact=True)
+    assert not np.asarray(nothing.crossed).any() and not bool(nothing.overflow)
+    assert (np.asarray(nothing.node) == x.shape[0]).all()
+
+
+def test_a_batch_measures_the_compact_swept_capacity_and_searches_under_vmap():
+    scene = cutting_scene(2_000, 18.0, x_tip_prev=18.3, dtype=FLOAT)
+    x_prevs = jnp.stack([scene.x_prev, scene.x])  # the second scene does not move: no crossing
+    xs = jnp.stack([scene.x, scene.x])
+    search = Search(compact=True, method="binned")  # paths only
+    state = search.allocate(xs, scene.surface, x_prev=x_prevs)
+    count = int(swept(scene.x_prev, scene.x, scene.surface).crossed.sum())
+    assert count <= state.path_sizes.contact_capacity < state.path_sizes.slave_capacity
+    entries, _ = jax.jit(jax.vmap(search.swept, (0, 0, 0, None)))(state, x_prevs, xs, scene.surface)
+    assert not np.asarray(entries.overflow).any()
+    for k in range(2):
+        got = jax.tree.map(lambda field, k=k: field[k], entries).to_crossing(xs.shape[1])
+        assert_same_crossing(got, swept(x_prevs[k], xs[k], scene.surface))
+    assert int(entries.crossed[0].sum()) == count > 0 == int(entries.crossed[1].sum())
