@@ -61,11 +61,20 @@ class Contact(NamedTuple):
     overflow: Array  # bool[]  a fixed capacity was too small; a contact may be missing
 
 
-def _spread(values: Array, node: Array, num_rows: int, empty) -> Array:
-    """Entries' ``values`` put at rows ``node`` of ``num_rows`` rows of ``empty``
-    (entries naming row ``num_rows``, the padding, are dropped)."""
-    shape = (num_rows,) + values.shape[1:]
-    return jnp.full(shape, empty, values.dtype).at[node].set(values, mode="drop")
+def _spread_rows(entries, dense: type, num_rows: int):
+    """The ``dense`` result (``Contact`` or ``Crossing``) of ``num_rows`` rows
+    that compact ``entries`` describe: each field's entries put at rows
+    ``entries.node`` of rows of nothing found (``-1`` for indices, else zero
+    or False); entries naming row ``num_rows``, the padding, are dropped."""
+
+    def put(name):
+        values = getattr(entries, name)
+        empty = -1 if name in ("segment", "vertex") else 0
+        shape = (num_rows,) + values.shape[1:]
+        return jnp.full(shape, empty, values.dtype).at[entries.node].set(values, mode="drop")
+
+    rows = {name: put(name) for name in dense._fields if name != "overflow"}
+    return dense(**rows, overflow=entries.overflow)
 
 
 class ContactList(NamedTuple):
@@ -99,20 +108,7 @@ class ContactList(NamedTuple):
     def to_contact(self, num_rows: int) -> Contact:
         """The dense ``Contact`` of ``num_rows`` slaves (N, static) these entries describe."""
 
-        def put(values, empty):
-            return _spread(values, self.node, num_rows, empty)
-
-        return Contact(
-            gap=put(self.gap, 0),
-            xi=put(self.xi, 0),
-            segment=put(self.segment, -1),
-            point=put(self.point, 0),
-            normal=put(self.normal, 0),
-            vertex=put(self.vertex, -1),
-            found=put(self.found, False),
-            active=put(self.active, False),
-            overflow=self.overflow,
-        )
+        return _spread_rows(self, Contact, num_rows)
 
 
 class Crossing(NamedTuple):
@@ -153,13 +149,4 @@ class CrossingList(NamedTuple):
     def to_crossing(self, num_rows: int) -> Crossing:
         """The dense ``Crossing`` of ``num_rows`` slaves (N, static) these entries describe."""
 
-        def put(values, empty):
-            return _spread(values, self.node, num_rows, empty)
-
-        return Crossing(
-            t=put(self.t, 0),
-            segment=put(self.segment, -1),
-            point=put(self.point, 0),
-            crossed=put(self.crossed, False),
-            overflow=self.overflow,
-        )
+        return _spread_rows(self, Crossing, num_rows)
