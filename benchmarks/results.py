@@ -78,6 +78,9 @@ SECTIONS = {
         ("--out", "{out}"),
         "{out}/targets.md",
     ),
+    "one_call": Section(
+        "A plain call against the jitted step, small scenes (issue 25, target 2)", "one_call.py"
+    ),
     "long_process": Section(
         "Long processes: memory maps",
         "long_process.py",

@@ -20,6 +20,7 @@ candidates found with a skin, across steps.
 
 from __future__ import annotations
 
+import collections
 import dataclasses
 import functools
 from collections.abc import Callable
@@ -532,6 +533,48 @@ def require_concrete(name: str, values, hint: str | None = None):
         )
 
 
+# The one-call forms keep their sizes, as a ``Search`` keeps them for its
+# caller: per query, result form and padded input shapes and dtypes, the
+# sizes last measured. A call runs with them and measures again only when
+# they overflow (then the search runs again at the new sizes), so that a
+# plain call on a scene that changes little costs one search, not a measure
+# and a search (issue 25, target 2: ``python benchmarks/one_call.py``). Never
+# a different answer: without overflow a result is all_to_all's (swept's)
+# whatever the sizes. The KEPT_SIZES signatures used last are kept.
+KEPT_SIZES = 64
+_kept_sizes: collections.OrderedDict = collections.OrderedDict()
+
+
+def _signature(*values) -> tuple:
+    """Hashable: the tree structure, shapes and dtypes of ``values`` (and a
+    ``Pairing``'s static ``self_contact``)."""
+    leaves, structure = jax.tree.flatten(values)
+    dtypes = (leaf.dtype if hasattr(leaf, "dtype") else np.asarray(leaf).dtype for leaf in leaves)
+    return structure, tuple(zip(map(np.shape, leaves), dtypes, strict=True))
+
+
+def with_kept_sizes(key, sizes_now: Callable[[], Sizes], search: Callable[[Sizes], object]):
+    """``search(sizes)`` at the sizes kept under ``key`` when they do not
+    overflow; else at ``sizes_now()``, which are kept instead."""
+    kept = _kept_sizes.get(key)
+    if kept is not None:
+        found = search(kept)
+        if not bool(found.overflow):
+            _kept_sizes.move_to_end(key)
+            return found
+    sizes = sizes_now()
+    _kept_sizes[key] = sizes
+    _kept_sizes.move_to_end(key)
+    while len(_kept_sizes) > KEPT_SIZES:
+        _kept_sizes.popitem(last=False)
+    return search(sizes)
+
+
+def forget_sizes() -> None:
+    """Drops the one-call forms' kept sizes: the next calls measure again."""
+    _kept_sizes.clear()
+
+
 def bucket_sort(
     x: Array,
     surface: Surface,
@@ -566,8 +609,10 @@ def bucket_sort(
       normals, corner: flat or smooth normals, as for ``all_to_all``.
 
     Returns:
-      A ``Contact`` equal to ``all_to_all``'s (its sizes are measured for
-      this data, so ``overflow`` is False), or its ``ContactList``.
+      A ``Contact`` equal to ``all_to_all``'s, ``overflow`` False, or its
+      ``ContactList``. The sizes last measured at the same padded shapes are
+      reused while they hold (as a ``Search`` holds them), and measured again
+      for this data when a search at them overflows.
 
     Example:
       >>> from jaxcontact import all_to_all, bucket_sort
@@ -587,10 +632,16 @@ def bucket_sort(
     x, mask, surface, radius, pairing, num_rows = pad_contact_scene(
         x, mask, surface, radius, pairing
     )
-    sizes = measure(x, surface, radius=reach_of(radius, mask), mask=mask, use_cells=use_cells)
-    if compact:
-        sizes = room_for_every_slot(sizes)
-    found = contact_jit(x, surface, radius, mask, sizes=sizes, pairing=pairing)
+
+    def sizes_now():
+        return measure(x, surface, radius=reach_of(radius, mask), mask=mask, use_cells=use_cells)
+
+    def search(sizes):
+        sizes = room_for_every_slot(sizes) if compact else sizes
+        return contact_jit(x, surface, radius, mask, sizes=sizes, pairing=pairing)
+
+    key = ("closest", compact, use_cells, _signature(x, mask, surface, radius, pairing))
+    found = with_kept_sizes(key, sizes_now, search)
     found = with_normals(found, x, surface, normals, corner)
     return cut_entries(found, num_rows) if compact else cut_rows(found, num_rows)
 
@@ -623,7 +674,8 @@ def bucket_swept(
       slave_node, slave_body, self_contact: the pair rule, as for ``swept``.
 
     Returns:
-      A ``Crossing`` equal to ``swept``'s, or its ``CrossingList``.
+      A ``Crossing`` equal to ``swept``'s, ``overflow`` False, or its
+      ``CrossingList``; sizes kept and measured again as ``bucket_sort``'s.
     """
     x_prev, x, mask = _inputs.check_path_inputs(x_prev, x, mask)
     surface = _inputs.check_surface(surface, x_prev.dtype)
@@ -631,8 +683,14 @@ def bucket_swept(
     require_concrete("bucket_swept", (x_prev, x, surface, mask, pairing))
     use_cells = surface.segments.shape[0] > CELLS_ABOVE
     (x_prev, x), mask, surface, pairing, num_rows = pad_scene((x_prev, x), mask, surface, pairing)
-    sizes = measure(x, surface, x_prev=x_prev, mask=mask, use_cells=use_cells)
-    if compact:
-        sizes = room_for_every_slot(sizes)
-    crossing = crossing_jit(x_prev, x, surface, mask, sizes=sizes, pairing=pairing)
+
+    def sizes_now():
+        return measure(x, surface, x_prev=x_prev, mask=mask, use_cells=use_cells)
+
+    def search(sizes):
+        sizes = room_for_every_slot(sizes) if compact else sizes
+        return crossing_jit(x_prev, x, surface, mask, sizes=sizes, pairing=pairing)
+
+    key = ("swept", compact, use_cells, _signature(x_prev, x, mask, surface, pairing))
+    crossing = with_kept_sizes(key, sizes_now, search)
     return cut_entries(crossing, num_rows) if compact else cut_rows(crossing, num_rows)

@@ -27,6 +27,25 @@ def _is_concrete(value) -> bool:
     return not isinstance(value, jax.core.Tracer)
 
 
+def as_array(values, dtype=None):
+    """``values`` as an array of ``dtype`` (the dtype JAX computes in: float64
+    becomes float32 with x64 off), without a transfer for host data.
+
+    NumPy arrays and Python or NumPy scalars stay NumPy arrays: a jitted
+    program takes them as arguments for a few microseconds each, where
+    ``jnp.asarray`` puts each on the device apart (about 0.1 ms on the CPU,
+    measured: benchmarks/one_call.py). JAX arrays and tracers go through
+    ``jnp.asarray``.
+    """
+    if isinstance(values, jax.Array | jax.core.Tracer):
+        if dtype is None or values.dtype == dtype:
+            return values
+        return jnp.asarray(values, dtype)
+    values = np.asarray(values)
+    wanted = values.dtype if dtype is None else np.dtype(dtype)
+    return np.asarray(values, jax.dtypes.canonicalize_dtype(wanted))
+
+
 def _describe(value) -> str:
     return f"shape {tuple(np.shape(value))} and dtype {jnp.result_type(value)}"
 
@@ -51,7 +70,7 @@ def check_points(name: str, points, dtype=None) -> Array:
         raise ValueError(
             f"{name} must have the slaves' dtype {np.dtype(dtype)}; got {_describe(points)}"
         )
-    return jnp.asarray(points)
+    return as_array(points, computed)
 
 
 def check_mask(name: str, mask, length: int) -> Array | None:
@@ -64,7 +83,7 @@ def check_mask(name: str, mask, length: int) -> Array | None:
         raise ValueError(
             f"{name} must have shape ({length},) and dtype bool; got {_describe(mask)}"
         )
-    return jnp.asarray(mask)
+    return as_array(mask)
 
 
 def check_segments(segments):
@@ -109,11 +128,11 @@ def _as_int32(segments, num_nodes: int):
     ``-1`` first, compared in their own dtype.
     """
     if np.can_cast(segments.dtype, np.int32):
-        return jnp.asarray(segments, jnp.int32)
+        return as_array(segments, np.int32)
     # NumPy input stays in NumPy: with x64 off, jnp would narrow it first.
     xp = np if isinstance(segments, np.ndarray) else jnp
     in_range = (segments >= 0) & (segments < num_nodes)
-    return jnp.asarray(xp.where(in_range, segments.astype(np.int32), -1), jnp.int32)
+    return as_array(xp.where(in_range, segments.astype(np.int32), -1), np.int32)
 
 
 def check_surface(surface: Surface, dtype) -> Surface:
@@ -145,7 +164,7 @@ def check_radius(radius, dtype, num_rows: int | None = None, mask=None) -> Array
         bad = ~np.isfinite(values) | (values < 0)
         if bad.any():
             raise ValueError(f"radius must be finite and >= 0; got {values[bad][0]}")
-    return jnp.asarray(radius, dtype)
+    return as_array(radius, dtype)
 
 
 def reach_of(radius: Array, ok: Array | None) -> Array:
@@ -173,14 +192,14 @@ def check_labels(name: str, labels, length: int, symbol: str = "N"):
             f"got {_describe(labels)}"
         )
     if np.can_cast(labels.dtype, np.int32):
-        return jnp.asarray(labels, jnp.int32)
+        return as_array(labels, np.int32)
     # Wider labels are compared in their own dtype first: narrowing wraps.
     xp = np if isinstance(labels, np.ndarray) else jnp
     info = np.iinfo(np.int32)
     fits = (labels >= info.min) & (labels <= info.max)
     if _is_concrete(labels) and not np.all(np.asarray(fits)):
         raise ValueError(f"{name} must fit in int32; got {_describe(labels)}")
-    return jnp.asarray(xp.where(fits, labels, -1).astype(np.int32))
+    return as_array(xp.where(fits, labels, -1).astype(np.int32))
 
 
 def check_pairing(slave_node, slave_body, self_contact, x, surface: Surface, mask):

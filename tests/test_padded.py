@@ -83,3 +83,48 @@ def test_traced_calls_are_not_padded():
     traced = jax.jit(lambda x: all_to_all(x, Surface(NODES, SEGMENTS), radius=0.3).gap)(x)
     plain = all_to_all(x, Surface(NODES, SEGMENTS), radius=0.3).gap
     np.testing.assert_array_equal(traced, plain)
+
+
+@pytest.mark.parametrize("query", ["closest", "swept"])
+def test_plain_bucket_calls_keep_their_sizes_and_measure_again_only_past_them(query, monkeypatch):
+    # The one-call forms keep the sizes they measured per padded shape (as a
+    # Search does) and measure again only when a search at them overflows.
+    import jaxcontact._bucket as bucket
+
+    measured = []
+    real_measure = bucket.measure
+    monkeypatch.setattr(
+        bucket, "measure", lambda *a, **k: measured.append(1) or real_measure(*a, **k)
+    )
+    bucket.forget_sizes()
+    rng = np.random.default_rng(1)
+    near = rng.uniform([0.0, -0.25], [3.0, 0.25], (256, 2))
+    one_block = near.copy()
+    one_block[64:, 1] += 100.0  # only the first block of 64 rows near the master
+    surface = Surface(NODES, SEGMENTS)
+    if query == "closest":
+        detect, dense, flag = _closest(bucket_sort), _closest(all_to_all), "found"
+    else:
+        detect, dense, flag = _crossing(bucket_swept), _crossing(swept), "crossed"
+    # Kept, still enough, outgrown (measured again), then the larger ones kept.
+    for x, measures in ((one_block, 1), (one_block + 0.01, 1), (near, 2), (one_block, 2)):
+        got, want = detect(x, surface), dense(x, surface)
+        assert len(measured) == measures
+        assert not bool(got.overflow)
+        np.testing.assert_array_equal(got.segment, want.segment)
+        np.testing.assert_array_equal(getattr(got, flag), getattr(want, flag))
+        assert getattr(want, flag).any()
+    bucket.forget_sizes()
+
+
+def test_checked_host_inputs_stay_numpy_in_the_dtype_jax_computes_in():
+    from jaxcontact._inputs import as_array
+
+    values = as_array(np.zeros((3, 2)))
+    assert isinstance(values, np.ndarray)
+    assert values.dtype == jax.dtypes.canonicalize_dtype(np.float64)
+    radius = as_array(0.5, np.float32)
+    assert isinstance(radius, np.ndarray) and radius.dtype == np.float32
+    on_device = jax.numpy.zeros(3)
+    assert as_array(on_device) is on_device
+    assert as_array(on_device, np.int32).dtype == np.int32
