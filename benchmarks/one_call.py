@@ -20,7 +20,9 @@ are allocated once, outside the timer, for the 8 configurations
 (``jaxcontact.bench.timing.time_interleaved``: warm-up calls, then
 ``--repeats`` rounds, every call ended by ``block_until_ready``; median and
 10th-90th percentile). The ratio column is each median over the jitted
-``Search`` step's for the same query. Every plain answer's ``segment`` and
+``Search`` step's for the same query; the last, each plain call's over the
+same program jitted (``jax.jit`` of the dense detector; for a bucket form,
+the ``Search`` step, whose program it runs). Every plain answer's ``segment`` and
 ``found`` (``crossed``) are checked against the jitted step's.
 
     python benchmarks/one_call.py             # 300 rounds
@@ -43,6 +45,7 @@ from jaxcontact.bench.timing import pinned_note, time_interleaved
 from jaxcontact.scenes import cutting_scene, paper_scene
 
 CONFIGURATIONS = 8
+CLOSEST, SWEPT = "closest: jitted Search.closest step", "swept: jitted Search.swept step"
 
 
 def scenes():
@@ -81,13 +84,17 @@ def rows_for(scene, radius: float, repeats: int, warmup: int):
     for x_prev, x in moved:
         state = search.allocate(x, surface, x_prev=x_prev, at_least=state)
     closest, swept = jax.jit(search.closest), jax.jit(search.swept)
+    dense = jax.jit(lambda x: jaxcontact.all_to_all(x, surface, radius=radius))
+    dense_swept = jax.jit(lambda xp, x: jaxcontact.swept(xp, x, surface))
     calls = {
         "closest: jitted Search.closest step": lambda xp, x: closest(state, x, surface)[0],
+        "closest: jitted all_to_all": lambda xp, x: dense(x),
         "closest: plain all_to_all": lambda xp, x: jaxcontact.all_to_all(x, surface, radius=radius),
         "closest: plain bucket_sort": lambda xp, x: jaxcontact.bucket_sort(
             x, surface, radius=radius
         ),
         "swept: jitted Search.swept step": lambda xp, x: swept(state, xp, x, surface)[0],
+        "swept: jitted swept": lambda xp, x: dense_swept(xp, x),
         "swept: plain swept": lambda xp, x: jaxcontact.swept(xp, x, surface),
         "swept: plain bucket_swept": lambda xp, x: jaxcontact.bucket_swept(xp, x, surface),
     }
@@ -122,8 +129,8 @@ def main(argv=None) -> int:
         "every plain answer equal to the jitted step's (segment, found or crossed)."
     )
     print()
-    print("| scene | call | median (ms) | p10-p90 (ms) | / jitted step |")
-    print("|---|---|---:|---|---:|")
+    print("| scene | call | median (ms) | p10-p90 (ms) | / jitted step | / its jitted form |")
+    print("|---|---|---:|---|---:|---:|")
     for scene_name, (scene, radius) in scenes().items():
         timings = rows_for(scene, radius, repeats, args.warmup)
         step = {
@@ -132,9 +139,19 @@ def main(argv=None) -> int:
         }
         for name, timing in timings.items():
             ratio = timing.median_s / step[name.split(":")[0]]
+            # A plain call over the same program jitted: a dense detector's
+            # jitted call, a bucket form's Search step.
+            same = name.replace("plain", "jitted")
+            same = (
+                same
+                if same in timings
+                else {"closest": CLOSEST, "swept": SWEPT}[name.split(":")[0]]
+            )
+            own = timing.median_s / timings[same].median_s if "plain" in name else float("nan")
             print(
                 f"| {scene_name} | {name} | {timing.median_s * 1e3:.3f} | "
-                f"{timing.p10_s * 1e3:.3f}-{timing.p90_s * 1e3:.3f} | {ratio:.2f} |",
+                f"{timing.p10_s * 1e3:.3f}-{timing.p90_s * 1e3:.3f} | {ratio:.2f} | "
+                f"{'' if own != own else f'{own:.2f}'} |",
                 flush=True,
             )
     return 0
