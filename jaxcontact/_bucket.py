@@ -23,6 +23,7 @@ from __future__ import annotations
 import collections
 import dataclasses
 import functools
+import threading
 from collections.abc import Callable
 from typing import NamedTuple
 
@@ -543,6 +544,7 @@ def require_concrete(name: str, values, hint: str | None = None):
 # whatever the sizes. The KEPT_SIZES signatures used last are kept.
 KEPT_SIZES = 64
 _kept_sizes: collections.OrderedDict = collections.OrderedDict()
+_kept_lock = threading.Lock()  # plain calls from several threads share the table
 
 
 def _signature(*values) -> tuple:
@@ -556,23 +558,31 @@ def _signature(*values) -> tuple:
 def with_kept_sizes(key, sizes_now: Callable[[], Sizes], search: Callable[[Sizes], object]):
     """``search(sizes)`` at the sizes kept under ``key`` when they do not
     overflow; else at ``sizes_now()``, which are kept instead."""
-    kept = _kept_sizes.get(key)
+    with _kept_lock:
+        kept = _kept_sizes.get(key)
     if kept is not None:
         found = search(kept)
         if not bool(found.overflow):
-            _kept_sizes.move_to_end(key)
+            _keep(key, kept)
             return found
     sizes = sizes_now()
-    _kept_sizes[key] = sizes
-    _kept_sizes.move_to_end(key)
-    while len(_kept_sizes) > KEPT_SIZES:
-        _kept_sizes.popitem(last=False)
+    _keep(key, sizes)
     return search(sizes)
+
+
+def _keep(key, sizes: Sizes) -> None:
+    """``sizes`` kept under ``key``, as the last used; the oldest dropped past KEPT_SIZES."""
+    with _kept_lock:
+        _kept_sizes[key] = sizes
+        _kept_sizes.move_to_end(key)
+        while len(_kept_sizes) > KEPT_SIZES:
+            _kept_sizes.popitem(last=False)
 
 
 def forget_sizes() -> None:
     """Drops the one-call forms' kept sizes: the next calls measure again."""
-    _kept_sizes.clear()
+    with _kept_lock:
+        _kept_sizes.clear()
 
 
 def bucket_sort(
