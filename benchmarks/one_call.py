@@ -45,7 +45,11 @@ from jaxcontact.bench.timing import pinned_note, time_interleaved
 from jaxcontact.scenes import cutting_scene, paper_scene
 
 CONFIGURATIONS = 8
-CLOSEST, SWEPT = "closest: jitted Search.closest step", "swept: jitted Search.swept step"
+# Each query's jitted Search step, the reference of its rows.
+STEP = {
+    "closest": "closest: jitted Search.closest step",
+    "swept": "swept: jitted Search.swept step",
+}
 
 
 def scenes():
@@ -87,23 +91,20 @@ def rows_for(scene, radius: float, repeats: int, warmup: int):
     dense = jax.jit(lambda x: jaxcontact.all_to_all(x, surface, radius=radius))
     dense_swept = jax.jit(lambda xp, x: jaxcontact.swept(xp, x, surface))
     calls = {
-        "closest: jitted Search.closest step": lambda xp, x: closest(state, x, surface)[0],
+        STEP["closest"]: lambda xp, x: closest(state, x, surface)[0],
         "closest: jitted all_to_all": lambda xp, x: dense(x),
         "closest: plain all_to_all": lambda xp, x: jaxcontact.all_to_all(x, surface, radius=radius),
         "closest: plain bucket_sort": lambda xp, x: jaxcontact.bucket_sort(
             x, surface, radius=radius
         ),
-        "swept: jitted Search.swept step": lambda xp, x: swept(state, xp, x, surface)[0],
+        STEP["swept"]: lambda xp, x: swept(state, xp, x, surface)[0],
         "swept: jitted swept": lambda xp, x: dense_swept(xp, x),
         "swept: plain swept": lambda xp, x: jaxcontact.swept(xp, x, surface),
         "swept: plain bucket_swept": lambda xp, x: jaxcontact.bucket_swept(xp, x, surface),
     }
     # Answers first: each plain form against the jitted step, configuration by configuration.
     for x_prev, x in moved:
-        want = {
-            "closest": calls["closest: jitted Search.closest step"](x_prev, x),
-            "swept": calls["swept: jitted Search.swept step"](x_prev, x),
-        }
+        want = {query: calls[step](x_prev, x) for query, step in STEP.items()}
         for name, call in calls.items():
             query = name.split(":")[0]
             got, reference = call(x_prev, x), want[query]
@@ -133,25 +134,18 @@ def main(argv=None) -> int:
     print("|---|---|---:|---|---:|---:|")
     for scene_name, (scene, radius) in scenes().items():
         timings = rows_for(scene, radius, repeats, args.warmup)
-        step = {
-            "closest": timings["closest: jitted Search.closest step"].median_s,
-            "swept": timings["swept: jitted Search.swept step"].median_s,
-        }
         for name, timing in timings.items():
-            ratio = timing.median_s / step[name.split(":")[0]]
+            step = timings[STEP[name.split(":")[0]]]
             # A plain call over the same program jitted: a dense detector's
             # jitted call, a bucket form's Search step.
-            same = name.replace("plain", "jitted")
-            same = (
-                same
-                if same in timings
-                else {"closest": CLOSEST, "swept": SWEPT}[name.split(":")[0]]
-            )
-            own = timing.median_s / timings[same].median_s if "plain" in name else float("nan")
+            own = ""
+            if "plain" in name:
+                same = timings.get(name.replace("plain", "jitted"), step)
+                own = f"{timing.median_s / same.median_s:.2f}"
             print(
                 f"| {scene_name} | {name} | {timing.median_s * 1e3:.3f} | "
-                f"{timing.p10_s * 1e3:.3f}-{timing.p90_s * 1e3:.3f} | {ratio:.2f} | "
-                f"{'' if own != own else f'{own:.2f}'} |",
+                f"{timing.p10_s * 1e3:.3f}-{timing.p90_s * 1e3:.3f} | "
+                f"{timing.median_s / step.median_s:.2f} | {own} |",
                 flush=True,
             )
     return 0
