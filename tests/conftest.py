@@ -12,11 +12,14 @@ process-wide):
   float32 in this mode. ``tests/test_x64_off.py`` runs a chosen part of the
   suite this way in a process of its own.
 
-``JAXCONTACT_FAST_COMPILE=1`` (opt-in, never in CI) compiles with XLA's
-older CPU emitters (``--xla_cpu_use_fusion_emitters=false``): measured on
-2 cores with jax 0.9.0, the whole suite took 6 min 50 s instead of 9 min 35 s,
-as most of its time is XLA compiling. CI runs what users run, the default
-emitters; this is for a quick local check only.
+The suite compiles with XLA's older CPU emitters
+(``--xla_cpu_use_fusion_emitters=false``): a third less compile time for the
+same answers, and most of the suite's time is XLA compiling (README,
+Development, has the measurements). ``JAXCONTACT_FAST_COMPILE=0`` compiles
+with XLA's defaults instead; ``tests/test_x64_off.py`` runs its pass that
+way, so that the path most users run (x64 off, XLA's default emitters) is
+tested as they run it, and ``JAXCONTACT_FAST_COMPILE=0 python -m pytest -q
+-n 2`` runs the whole suite so.
 """
 
 import os
@@ -32,8 +35,11 @@ X64 = os.environ.get("JAXCONTACT_X64", "1") != "0"
 # suites inherit it.
 _FAST = "--xla_cpu_use_fusion_emitters=false"
 _FLAGS = os.environ.get("XLA_FLAGS", "")
-if os.environ.get("JAXCONTACT_FAST_COMPILE") == "1" and _FAST not in _FLAGS:
-    os.environ["XLA_FLAGS"] = f"{_FLAGS} {_FAST}".strip()
+if os.environ.get("JAXCONTACT_FAST_COMPILE", "1") != "0":
+    if _FAST not in _FLAGS:
+        os.environ["XLA_FLAGS"] = f"{_FLAGS} {_FAST}".strip()
+else:
+    os.environ["XLA_FLAGS"] = " ".join(flag for flag in _FLAGS.split() if flag != _FAST)
 
 # tests/sharded needs 4 devices, fixed when JAX starts: tests/test_shard.py
 # runs it in a process of its own, with JAXCONTACT_SHARDED=1.

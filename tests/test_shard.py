@@ -42,7 +42,8 @@ def test_sharded_on_one_device_is_the_detector():
 
 def _example(*args, devices: int):
     env = dict(os.environ)
-    env["XLA_FLAGS"] = f"--xla_force_host_platform_device_count={devices}"
+    flags = os.environ.get("XLA_FLAGS", "") + f" --xla_force_host_platform_device_count={devices}"
+    env["XLA_FLAGS"] = flags.strip()
     return subprocess.Popen(
         [sys.executable, "examples/multihost.py", "--nodes", "3000", *args],
         cwd=ROOT,

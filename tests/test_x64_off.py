@@ -4,7 +4,8 @@ tests/conftest.py turns ``jax_enable_x64`` on, so that float64 is tested;
 most users run with it off (JAX's default), where NumPy float64 inputs,
 float64 radii and int64 indices become 32-bit. The flag is fixed when JAX
 starts, so the tests marked ``x64_off`` run again in a subprocess with
-``JAXCONTACT_X64=0``: every detector (``all_to_all``, ``swept``,
+``JAXCONTACT_X64=0`` and XLA's default CPU emitters (the rest of the
+suite compiles with the older ones, tests/conftest.py): every detector (``all_to_all``, ``swept``,
 ``bucket_sort``, ``bucket_swept``), the ``Search`` object, the validation
 errors and the dtype rules, with the tests that need float64 skipped
 (conftest.py) and the sweeps over random scenes' sizes (tests/test_all_to_all.py,
@@ -23,4 +24,7 @@ from tests.helpers import X64, assert_pytest_passes_in_subprocess
 @pytest.mark.slow
 @pytest.mark.skipif(not X64, reason="this process runs with x64 off already")
 def test_the_default_path_with_x64_off():
-    assert_pytest_passes_in_subprocess(["-m", "x64_off", "tests"], {"JAXCONTACT_X64": "0"})
+    # XLA's default CPU emitters here, as users run them, where the rest of the
+    # suite compiles with the older ones (tests/conftest.py, JAXCONTACT_FAST_COMPILE).
+    env = {"JAXCONTACT_X64": "0", "JAXCONTACT_FAST_COMPILE": "0"}
+    assert_pytest_passes_in_subprocess(["-m", "x64_off", "tests"], env)

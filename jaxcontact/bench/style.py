@@ -46,6 +46,7 @@ JAXCONTACT = {
     "Search.closest (compact, reused state)": ("#4a1486", "v"),
     "swept": ("#6baed6", "P"),
     "bucket_swept": ("#74c476", "X"),
+    "Search.swept (compact)": ("#225ea8", "8"),
     # time_vs_error's bucket sorts with shrunk sizes: a hue per kind of size, darker as it shrinks.
     "bucket_sort f32, blocks x0.75": ("#9e9ac8", "<"),
     "bucket_sort f32, blocks x0.5": ("#756bb1", ">"),
@@ -94,6 +95,7 @@ ALIASES = {
     "bucket_sort compact": "bucket_sort (compact)",
     "bucket_swept f32": "bucket_swept",
     "swept f32": "swept",
+    "Search.swept, compact": "Search.swept (compact)",
 }
 STYLES = {**JAXCONTACT, **PEERS, **{name: (colour, "") for name, (colour, _) in GUIDES.items()}}
 
