@@ -4,9 +4,10 @@ tests/conftest.py turns ``jax_enable_x64`` on, so that float64 is tested;
 most users run with it off (JAX's default), where NumPy float64 inputs,
 float64 radii and int64 indices become 32-bit. The flag is fixed when JAX
 starts, so the tests marked ``x64_off`` run again in a subprocess with
-``JAXCONTACT_X64=0`` and XLA's default CPU emitters (the rest of the
-suite compiles with the older ones, tests/conftest.py): every detector (``all_to_all``, ``swept``,
-``bucket_sort``, ``bucket_swept``), the ``Search`` object, the validation
+``JAXCONTACT_X64=0`` and XLA's default CPU emitters (the rest of the suite
+compiles with the older ones, tests/conftest.py): every detector
+(``all_to_all``, ``swept``, ``bucket_sort``, ``bucket_swept``), the
+``Search`` object, the validation
 errors and the dtype rules, with the tests that need float64 skipped
 (conftest.py) and the sweeps over random scenes' sizes (tests/test_all_to_all.py,
 tests/test_swept.py) at their largest size only. Gradients and transforms (tests/test_grad.py,
@@ -15,6 +16,8 @@ under its ceiling; their float32 programs are the same but for index dtypes. By 
 ``JAXCONTACT_X64=0 python -m pytest -q -n 2 -m x64_off``; the whole suite
 that way: ``JAXCONTACT_X64=0 python -m pytest -q -n 2``.
 """
+
+import os
 
 import pytest
 
@@ -28,3 +31,11 @@ def test_the_default_path_with_x64_off():
     # suite compiles with the older ones (tests/conftest.py, JAXCONTACT_FAST_COMPILE).
     env = {"JAXCONTACT_X64": "0", "JAXCONTACT_FAST_COMPILE": "0"}
     assert_pytest_passes_in_subprocess(["-m", "x64_off", "tests"], env)
+
+
+@pytest.mark.x64_off
+def test_the_suite_compiles_with_the_emitters_it_was_asked_for():
+    # Both passes check the environment JAX starts from: the older emitters
+    # unless JAXCONTACT_FAST_COMPILE=0 (as the x64-off pass above sets it).
+    older = "--xla_cpu_use_fusion_emitters=false" in os.environ.get("XLA_FLAGS", "").split()
+    assert older == (os.environ.get("JAXCONTACT_FAST_COMPILE", "1") != "0")
