@@ -22,11 +22,16 @@ from tests.helpers import assert_pytest_passes_in_subprocess
 ROOT = Path(__file__).resolve().parent.parent
 
 
+def _xla_flags(devices: int) -> str:
+    """This process's XLA flags (the suite's emitters), with ``devices`` CPU devices."""
+    flags = f"{os.environ.get('XLA_FLAGS', '')} --xla_force_host_platform_device_count={devices}"
+    return flags.strip()
+
+
 @pytest.mark.multidevice
 @pytest.mark.slow
 def test_sharded_suite_on_four_cpu_devices():
-    flags = os.environ.get("XLA_FLAGS", "") + " --xla_force_host_platform_device_count=4"
-    env = {"XLA_FLAGS": flags.strip(), "JAXCONTACT_SHARDED": "1"}
+    env = {"XLA_FLAGS": _xla_flags(4), "JAXCONTACT_SHARDED": "1"}
     assert_pytest_passes_in_subprocess(["tests/sharded"], env)
 
 
@@ -41,9 +46,7 @@ def test_sharded_on_one_device_is_the_detector():
 
 
 def _example(*args, devices: int):
-    env = dict(os.environ)
-    flags = os.environ.get("XLA_FLAGS", "") + f" --xla_force_host_platform_device_count={devices}"
-    env["XLA_FLAGS"] = flags.strip()
+    env = {**os.environ, "XLA_FLAGS": _xla_flags(devices)}
     return subprocess.Popen(
         [sys.executable, "examples/multihost.py", "--nodes", "3000", *args],
         cwd=ROOT,
