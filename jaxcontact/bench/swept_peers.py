@@ -191,9 +191,13 @@ def run(quick: bool, out: str, repeats: int | None = None, slow_s: float | None 
     """Runs every scene, writes CSV and markdown into ``out``; returns the markdown."""
     slow_s = slow_s or (3.0 if quick else 30.0)
     rows = []
-    for kind, size, parameters in _run.progress(QUICK_SCENES if quick else FULL_SCENES, "swept"):
+    scenes = QUICK_SCENES if quick else FULL_SCENES
+    for done, (kind, size, parameters) in enumerate(_run.progress(scenes, "swept"), 1):
         count = repeats or (5 if quick else (20 if size <= 10**5 else 5))
         rows += run_scene(kind, size, parameters, count, slow_s)
+        # Each scene's rows kept as soon as they are measured, as size_scaling.py keeps
+        # them: a lent GPU's time ran out part way (2 of 7 scenes in 135 s), leaving none.
+        _run.write(out, "swept_peers", rows, f"Partial: {done} of {len(scenes)} scenes.\n")
     columns = ("scene", "nodes", "segments", "method", "compile_s", "median_ms", "p10_ms")
     more = ("p90_ms", "runs", "ratio", "missed", "false", "ties", "wrong_segment", "max_t_error")
     note = (
