@@ -13,13 +13,18 @@ process-wide):
   suite this way in a process of its own.
 
 The suite compiles with XLA's older CPU emitters
-(``--xla_cpu_use_fusion_emitters=false``): a third less compile time for the
-same answers, and most of the suite's time is XLA compiling (README,
-Development, has the measurements). ``JAXCONTACT_FAST_COMPILE=0`` compiles
-with XLA's defaults instead; ``tests/test_x64_off.py`` runs its pass that
-way, so that the path most users run (x64 off, XLA's default emitters) is
-tested as they run it, and ``JAXCONTACT_FAST_COMPILE=0 python -m pytest -q
--n 2`` runs the whole suite so.
+(``--xla_cpu_use_fusion_emitters=false``) and without LLVM's optimisation
+(``--xla_backend_optimization_level=0``; XLA's default is 3): most of the
+suite's time is XLA compiling, and the two together take about a third off
+the whole suite for the same answers (README, Development, has the
+measurements). The one test whose check depends on the optimised code, two
+routes of one arithmetic agreeing to the last bit, compiles its program at
+XLA's default level itself (tests/test_small_paths.py).
+``JAXCONTACT_FAST_COMPILE=0`` compiles with XLA's defaults instead;
+``tests/test_x64_off.py`` runs its pass that way, so that the path most
+users run (x64 off, XLA's default code generation) is tested as they run
+it, and ``JAXCONTACT_FAST_COMPILE=0 python -m pytest -q -n 2`` runs the
+whole suite so.
 """
 
 import os
@@ -32,14 +37,12 @@ from hypothesis import HealthCheck, settings
 X64 = os.environ.get("JAXCONTACT_X64", "1") != "0"
 
 # Read when JAX starts its CPU backend, after this file runs; subprocess
-# suites inherit it.
-_FAST = "--xla_cpu_use_fusion_emitters=false"
-_FLAGS = os.environ.get("XLA_FLAGS", "")
+# suites inherit them (tests/test_x64_off.py's pass strips them again).
+FAST_COMPILE = ("--xla_cpu_use_fusion_emitters=false", "--xla_backend_optimization_level=0")
+_FLAGS = [flag for flag in os.environ.get("XLA_FLAGS", "").split() if flag not in FAST_COMPILE]
 if os.environ.get("JAXCONTACT_FAST_COMPILE", "1") != "0":
-    if _FAST not in _FLAGS:
-        os.environ["XLA_FLAGS"] = f"{_FLAGS} {_FAST}".strip()
-else:
-    os.environ["XLA_FLAGS"] = " ".join(flag for flag in _FLAGS.split() if flag != _FAST)
+    _FLAGS += FAST_COMPILE
+os.environ["XLA_FLAGS"] = " ".join(_FLAGS)
 
 # tests/sharded needs 4 devices, fixed when JAX starts: tests/test_shard.py
 # runs it in a process of its own, with JAXCONTACT_SHARDED=1.
