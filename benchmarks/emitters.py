@@ -1,11 +1,16 @@
-"""XLA's two CPU code generators, per program: run time and compile time.
+"""XLA's CPU code generation, three ways per program: run time and compile time.
 
 XLA compiles CPU fusions with its "fusion emitters" by default; the debug
-option ``xla_cpu_use_fusion_emitters=false`` selects its older emitters.
-jaxcontact keeps XLA's defaults; this script shows what the other choice
-would give: each program is compiled both ways in one process (``jax.jit(...,
-compiler_options=...)``, as top-level programs), checked to give the same
-answer, and timed interleaved, call by call.
+option ``xla_cpu_use_fusion_emitters=false`` selects its older emitters, and
+``xla_backend_optimization_level=0`` (XLA's default is 3) turns LLVM's
+optimisation off, as jaxcontact's test suite compiles (tests/conftest.py).
+jaxcontact keeps XLA's defaults; this script shows what the other choices
+would give: each program is compiled the three ways in one process
+(``jax.jit(..., compiler_options=...)``, as top-level programs) and timed
+interleaved, call by call. The two emitters must give the same answer bit
+for bit; without LLVM's optimisation the floating-point results may differ
+in their last bits, so the table counts the elements that differ from the
+default's answer and the largest difference.
 
 The scenes are docs/scenes.md's: the cutting scene, tool tip in the workpiece
 (x = 18, previous tip 18.2), and the rough die; float32.
@@ -23,6 +28,7 @@ import sys
 import time
 
 import jax
+import numpy as np
 from row_counts import medians  # benchmarks/, beside this script
 
 from jaxcontact import Search, _dense
@@ -32,17 +38,34 @@ from jaxcontact.bench._run import machine
 from jaxcontact.scenes import cutting_scene, rough_die_scene
 
 OLDER_EMITTERS = {"xla_cpu_use_fusion_emitters": False}
+UNOPTIMISED = {**OLDER_EMITTERS, "xla_backend_optimization_level": 0}
 
 
-def compiled_both_ways(fn, args):
-    """[(executable, compile seconds)] with the default emitters, then the older ones."""
+def compiled_each_way(fn, args):
+    """[(executable, compile seconds)] with XLA's defaults, the older emitters,
+    and the older emitters without LLVM's optimisation."""
     out = []
-    for options in (None, OLDER_EMITTERS):
+    for options in (None, OLDER_EMITTERS, UNOPTIMISED):
         jitted = jax.jit(fn, compiler_options=options) if options else jax.jit(fn)
         began = time.perf_counter()
         executable = jitted.lower(*args).compile()
         out.append((executable, time.perf_counter() - began))
     return out
+
+
+def differences(reference, other) -> str:
+    """Where two answers (pytrees of arrays) differ: per field, the elements that
+    differ and the largest absolute difference; "bit for bit" where none do."""
+    fields = getattr(reference, "_fields", None) or range(len(jax.tree.leaves(reference)))
+    found = []
+    pairs = zip(jax.tree.leaves(reference), jax.tree.leaves(other), strict=True)
+    for field, (a, b) in zip(fields, pairs, strict=True):
+        a, b = np.asarray(a), np.asarray(b)
+        differ = ~((a == b) | (np.isnan(a) & np.isnan(b)) if a.dtype.kind == "f" else a == b)
+        if differ.any():
+            largest = np.abs(a[differ].astype(np.float64) - b[differ].astype(np.float64)).max()
+            found.append(f"{field}: {int(differ.sum()):,} of {a.size:,}, up to {largest:.1e}")
+    return "; ".join(found) or "bit for bit"
 
 
 def programs(quick: bool):
@@ -85,14 +108,17 @@ def main(argv=None) -> int:
     print(f"`{command}`; {machine()}; float32; medians of {repeats} interleaved calls.\n")
     print(
         "| scene | program | run, fusion emitters | run, older emitters | older / fusion "
-        "| compile, fusion | compile, older |"
+        "| run, older at O0 | O0 / fusion | compile, fusion | compile, older "
+        "| compile, older at O0 | O0's answer against the default's |"
     )
-    print("|---|---|---:|---:|---:|---:|---:|")
+    print("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---|")
     for scene, name, fn, fn_args in programs(args.quick):
-        (fusion, fusion_s), (older, older_s) = compiled_both_ways(fn, fn_args)
-        fusion_run, older_run = medians([fusion, older], fn_args, repeats)
+        (fusion, fusion_s), (older, older_s), (bare, bare_s) = compiled_each_way(fn, fn_args)
+        fusion_run, older_run, bare_run = medians([fusion, older, bare], fn_args, repeats, 2)
         print(f"| {scene} | `{name}` | {fusion_run * 1e3:.2f} ms | {older_run * 1e3:.2f} ms "
-              f"| {older_run / fusion_run:.2f} | {fusion_s:.2f} s | {older_s:.2f} s |")  # fmt: skip
+              f"| {older_run / fusion_run:.2f} | {bare_run * 1e3:.2f} ms "
+              f"| {bare_run / fusion_run:.2f} | {fusion_s:.2f} s | {older_s:.2f} s "
+              f"| {bare_s:.2f} s | {differences(fusion(*fn_args), bare(*fn_args))} |")  # fmt: skip
     return 0
 
 

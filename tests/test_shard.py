@@ -23,7 +23,7 @@ ROOT = Path(__file__).resolve().parent.parent
 
 
 def _xla_flags(devices: int) -> str:
-    """This process's XLA flags (the suite's emitters), with ``devices`` CPU devices."""
+    """This process's XLA flags (the suite's code generation), with ``devices`` CPU devices."""
     flags = f"{os.environ.get('XLA_FLAGS', '')} --xla_force_host_platform_device_count={devices}"
     return flags.strip()
 
