@@ -37,10 +37,12 @@ def test_plane_chooses_as_the_running_minimum_does():
     ok = jnp.ones(40, bool).at[jnp.array([1, 7, 22])].set(False)
     pair_value = jax.vmap(squared_distance, in_axes=(0, None))
 
-    # At XLA's default optimisation level, as users compile it: the suite's
+    # With XLA's default code generation, as users compile it: the suite
     # (tests/conftest.py) leaves LLVM's optimisation off, and there the two
     # routes' float64 squared distances were seen 1 ulp apart (1 row of 11).
-    @functools.partial(jax.jit, compiler_options={"xla_backend_optimization_level": 3})
+    defaults = {"xla_backend_optimization_level": 3, "xla_cpu_use_fusion_emitters": True}
+
+    @functools.partial(jax.jit, compiler_options=defaults)
     def both(x, starts, ends, ok):
         edges = edge(starts, ends)
 
