@@ -19,10 +19,10 @@ suite's time is XLA compiling. The older emitters give the same answers bit
 for bit and compile about a third faster than XLA's defaults; LLVM's
 optimisation off takes another third off the whole suite, and its
 floating-point results may differ from the optimised code's in the last
-bits, within every tolerance the tests set (README, Development, has the
-measurements). The one test whose check depends on the optimised code, two
-routes of one arithmetic agreeing to the last bit, compiles its program
-with XLA's defaults itself (tests/test_small_paths.py).
+bits (README, Development, has the measurements). Every test passed so but
+one, whose check depends on the optimised code (two routes of one
+arithmetic agreeing to the last bit): it compiles its program with XLA's
+defaults itself (tests/test_small_paths.py).
 ``JAXCONTACT_FAST_COMPILE=0`` compiles with XLA's defaults instead;
 ``tests/test_x64_off.py`` runs its pass that way, so that the path most
 users run (x64 off, XLA's default code generation) is tested as they run
