@@ -27,6 +27,13 @@ median and 10th-90th percentile):
   each call runs the whole bucket sort with the allocated sizes, as (a).
 - (e) ``all_to_all``: every slave against every segment (the cutting scene
   only: on the rough die it is 10^9 pairs).
+- (f) ``bucket_sort (sized as the Search)``: (a)'s whole search with (b)'s
+  sizes (at ``radius + skin``, for both positions): what the larger sizes
+  alone cost.
+- (g) ``narrow phase on the kept candidates``: (b)'s candidates passed
+  straight to the narrow phase (``jaxcontact._bucket.contact_jit``), no skin
+  check and no ``cond``: (b) less (g) is what the check and the ``cond``
+  cost (on a GPU, a ``cond`` reads its predicate back to the host).
 
 Each answer's ``segment`` and ``found`` are compared with ``all_to_all``'s on
 the cutting scene and with (a)'s on the rough die (the ``check`` column), and
@@ -48,7 +55,7 @@ import sys
 import jax
 import numpy as np
 
-from jaxcontact import Contact, Search, all_to_all
+from jaxcontact import Contact, Search, _bucket, all_to_all
 from jaxcontact._sizes import measure
 from jaxcontact.bench._run import machine, sized_contact
 from jaxcontact.bench.timing import time_interleaved
@@ -70,6 +77,10 @@ def what(name: str, state) -> str:
         return "broad + narrow phase, sizes fixed (measured once, at the radius)"
     if name == "all_to_all":
         return "every slave against every segment"
+    if name == "bucket_sort (sized as the Search)":
+        return "broad + narrow phase, with the Search's sizes (radius + skin)"
+    if name == "narrow phase on the kept candidates":
+        return "narrow phase on the Search's kept candidates; no skin check, no cond"
     if state.candidates is None:
         return "no candidates kept: broad + narrow phase with the allocated sizes"
     if name == "Search.closest (reused state)":
@@ -108,6 +119,21 @@ def programs(scene, radius: float, skin: float, dense: bool):
             (plain.allocate(x, surface), x, surface),
         ),
     }
+    if reused.candidates is not None:
+        calls["bucket_sort (sized as the Search)"] = (
+            sized_contact(radius, reused.sizes),
+            (x, surface),
+        )
+        sizes = reused.sizes
+
+        @jax.jit
+        def narrow(x, surface, candidates):
+            return _bucket.contact_jit(x, surface, radius, None, sizes=sizes, candidates=candidates)
+
+        calls["narrow phase on the kept candidates"] = (
+            narrow,
+            (x, surface, reused.candidates),
+        )
     if dense:
         calls["all_to_all"] = (jax.jit(functools.partial(all_to_all, radius=radius)), (x, surface))
     notes = [

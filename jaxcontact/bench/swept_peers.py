@@ -17,10 +17,16 @@ segment met at the same time to within 1e-9: a path through a vertex shared
 by two segments), ``wrong_segment`` (another segment, met later) and
 ``max_t_error`` (the largest ``|t - t_reference|`` where both cross).
 
-    python benchmarks/swept_peers.py [--quick] [--out DIR]
+    python benchmarks/swept_peers.py [--quick] [--out DIR] [--scenes 6,7]
+
+``--scenes`` runs the full run's scenes of those numbers only (1 to 7, in
+the order above), to finish a run that was cut short (a lent GPU's time).
 """
 
 from __future__ import annotations
+
+import argparse
+import functools
 
 import jax
 import jax.numpy as jnp
@@ -187,11 +193,22 @@ def run_scene(kind, size, parameters, repeats, slow_s) -> list[dict]:
     )
 
 
-def run(quick: bool, out: str, repeats: int | None = None, slow_s: float | None = None) -> str:
-    """Runs every scene, writes CSV and markdown into ``out``; returns the markdown."""
+def run(
+    quick: bool,
+    out: str,
+    repeats: int | None = None,
+    slow_s: float | None = None,
+    numbers: tuple[int, ...] | None = None,
+) -> str:
+    """Runs every scene (or those of ``numbers``, counted from 1), writes CSV and
+    markdown into ``out``; returns the markdown."""
     slow_s = slow_s or (3.0 if quick else 30.0)
     rows = []
     scenes = QUICK_SCENES if quick else FULL_SCENES
+    if numbers:
+        if not all(1 <= n <= len(scenes) for n in numbers):
+            raise ValueError(f"scenes: expected numbers from 1 to {len(scenes)}, got {numbers}")
+        scenes = tuple(scenes[n - 1] for n in numbers)
     for done, (kind, size, parameters) in enumerate(_run.progress(scenes, "swept"), 1):
         count = repeats or (5 if quick else (20 if size <= 10**5 else 5))
         rows += run_scene(kind, size, parameters, count, slow_s)
@@ -211,4 +228,9 @@ def run(quick: bool, out: str, repeats: int | None = None, slow_s: float | None 
 
 
 def main(argv=None) -> int:
-    return _run.main(run, __doc__.splitlines()[0], argv, slow=True)
+    parser = argparse.ArgumentParser(add_help=False)
+    parser.add_argument("--scenes", default=None, help="comma-separated scene numbers, from 1")
+    known, rest = parser.parse_known_args(argv)
+    numbers = tuple(int(n) for n in known.scenes.split(",")) if known.scenes else None
+    chosen = functools.partial(run, numbers=numbers)
+    return _run.main(chosen, __doc__.splitlines()[0], rest, slow=True)
