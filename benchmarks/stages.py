@@ -152,7 +152,10 @@ def floor_calls(scene, whole):
         return value + 1
 
     def read(x, low, high):
-        return jnp.any(jnp.all((x >= low) & (x <= high), axis=-1))
+        # Per coordinate: ``jnp.all(..., axis=-1)`` over the length-2 axis runs
+        # as a loop per row on XLA's CPU, about twice this floor's time.
+        inside = [(x[:, k] >= low[k]) & (x[:, k] <= high[k]) for k in (0, 1)]
+        return jnp.any(inside[0] & inside[1])
 
     def write_contact(rows, gap, segment, point):
         empty = empty_contact(jnp.zeros((num_rows, 2), gap.dtype), jnp.zeros((), bool))

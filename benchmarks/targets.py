@@ -212,24 +212,29 @@ def main() -> None:
     args = parser.parse_args()
     repeats = args.repeats or (10 if args.quick else 40)
     threads = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else 1
-    rows = []
-    for kind, size, parameter in QUICK if args.quick else FULL:
-        rows += run_scene(kind, size, parameter, repeats, threads)
+    scenes = QUICK if args.quick else FULL
     command = "python benchmarks/targets.py" + (" --quick" if args.quick else "")
-    text = "\n".join(
-        [
-            f"`{command}`; {_run.machine()}; float32; median of {repeats} interleaved rounds "
-            "after 2 warm-up runs, compile apart.",
-            "",
-            table(rows),
-            "",
-        ]
+    header = (
+        f"`{command}`; {_run.machine()}; float32; median of {repeats} interleaved rounds "
+        "after 2 warm-up runs, compile apart."
     )
+    rows = []
+    for done, (kind, size, parameter) in enumerate(scenes, 1):
+        rows += run_scene(kind, size, parameter, repeats, threads)
+        # Each scene's rows kept as they come (a lent GPU's time may run out).
+        if args.out and done < len(scenes):
+            partial = f"Partial: {done} of {len(scenes)} scenes."
+            write(args.out, "\n".join([header, "", partial, "", table(rows), ""]))
+    text = "\n".join([header, "", table(rows), ""])
     print(text)
     if args.out:
-        path = pathlib.Path(args.out)
-        path.mkdir(parents=True, exist_ok=True)
-        (path / "targets.md").write_text(text)
+        write(args.out, text)
+
+
+def write(out: str, text: str) -> None:
+    path = pathlib.Path(out)
+    path.mkdir(parents=True, exist_ok=True)
+    (path / "targets.md").write_text(text)
 
 
 if __name__ == "__main__":

@@ -216,7 +216,7 @@ def swept(
 
 def path_lengths(x_prev: Array, x: Array) -> Array:
     """f[N]: each path's length, a path's reach for the self-contact window."""
-    return jnp.sqrt(jnp.sum((x - x_prev) ** 2, axis=-1))
+    return jnp.sqrt(_inputs.squared_norm(x - x_prev))
 
 
 @jax.jit

@@ -264,8 +264,16 @@ def machine() -> str:
     cpu = platform.processor() or platform.machine()
     try:
         with open("/proc/cpuinfo") as info:
-            cpu = next(line.split(":", 1)[1].strip() for line in info if "model name" in line)
-    except (OSError, StopIteration):
+            fields = dict(
+                (key.strip(), value.strip())
+                for key, _, value in (line.partition(":") for line in info)
+                if key.strip() in ("model name", "cpu family", "model")
+            )
+        cpu = fields.get("model name", cpu)
+        # "AMD EPYC" alone named machines whose speeds differed 3x (Zen 5 is family 26).
+        if "cpu family" in fields:
+            cpu += f" (family {fields['cpu family']}, model {fields.get('model', '?')})"
+    except OSError:
         pass
     return (
         f"{cpu}; {pinned_note()}; python {platform.python_version()}, jax {jax.__version__}, "
