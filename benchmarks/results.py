@@ -56,13 +56,19 @@ SECTIONS = {
     "time_vs_error": Section(
         "Time against error", "time_vs_error.py", ("--out", "{out}"), "{out}/time_vs_error.md"
     ),
+    # 2d3f36b: 0.7.3's reused step, before 0.7.4 rewrote the skin check.
     "search_step": Section(
-        "Search step", "search_step.py", ("--out", "{out}"), "{out}/search_step.md"
+        "Search step",
+        "search_step.py",
+        ("--out", "{out}", "--against", "2d3f36b"),
+        "{out}/search_step.md",
     ),
     "stability": Section("Stability", "stability.py", ("--out", "{out}")),
     "simulate": Section("Simulation", "simulate.py"),
     "row_counts": Section("Run time against the exact row count", "row_counts.py"),
     "emitters": Section("XLA's CPU code generators", "emitters.py"),
+    "threads": Section("XLA's threads inside one program", "threads.py"),
+    "malloc": Section("glibc's allocator: fresh pages against reused ones", "malloc.py"),
     "size_scaling": Section(
         "Size scaling: time, memory and compile time against N and M",
         "size_scaling.py",

@@ -34,6 +34,9 @@ median and 10th-90th percentile):
   straight to the narrow phase (``jaxcontact._bucket.contact_jit``), no skin
   check and no ``cond``: (b) less (g) is what the check and the ``cond``
   cost (on a GPU, a ``cond`` reads its predicate back to the host).
+- with ``--against REV``, ``Search.closest (reused state) at REV``: (b) as
+  that git revision builds it (``stages.py``'s extracted copy), timed in the
+  same rounds, its answer checked like the others'.
 
 Each answer's ``segment`` and ``found`` are compared with ``all_to_all``'s on
 the cutting scene and with (a)'s on the rough die (the ``check`` column), and
@@ -42,6 +45,7 @@ each overflow flag is reported.
     python benchmarks/search_step.py                 # 200 rounds
     python benchmarks/search_step.py --quick         # 20 rounds, a smoke test
     python benchmarks/search_step.py --out DIR       # also writes DIR/search_step.md
+    python benchmarks/search_step.py --against REV   # and REV's reused step beside
     taskset -c 0 python benchmarks/search_step.py    # pinned to one core
 """
 
@@ -50,6 +54,7 @@ from __future__ import annotations
 import argparse
 import functools
 import os
+import pathlib
 import sys
 
 import jax
@@ -60,6 +65,9 @@ from jaxcontact._sizes import measure
 from jaxcontact.bench._run import machine, sized_contact
 from jaxcontact.bench.timing import time_interleaved
 from jaxcontact.scenes import cutting_scene, rough_die_scene
+
+sys.path.insert(0, str(pathlib.Path(__file__).parent))
+from stages import against  # noqa: E402
 
 
 def scenes(quick: bool):
@@ -83,7 +91,7 @@ def what(name: str, state) -> str:
         return "narrow phase on the Search's kept candidates; no skin check, no cond"
     if state.candidates is None:
         return "no candidates kept: broad + narrow phase with the allocated sizes"
-    if name == "Search.closest (reused state)":
+    if name.startswith("Search.closest (reused state)"):
         return "skin check; candidates kept; narrow phase on them"
     return "skin check; candidates found again; narrow phase"
 
@@ -96,7 +104,7 @@ def differences(result, reference) -> str:
     return f"{wrong} of {int(np.sum(np.asarray(reference.found)))} found differ"
 
 
-def programs(scene, radius: float, skin: float, dense: bool):
+def programs(scene, radius: float, skin: float, dense: bool, revision: str | None = None):
     """name -> (fn, args), and notes on how they were set up."""
     x, surface = scene.x, scene.surface
     sized_sizes = measure(x, surface, radius=radius)
@@ -133,6 +141,15 @@ def programs(scene, radius: float, skin: float, dense: bool):
         calls["narrow phase on the kept candidates"] = (
             narrow,
             (x, surface, reused.candidates),
+        )
+    if revision:
+        package, _ = against(revision)
+        then = package.Search(radius=radius, skin=skin)
+        surface_then = package.Surface(*surface)
+        state_then = then.allocate(x, surface_then)
+        calls[f"Search.closest (reused state) at {revision}"] = (
+            jax.jit(then.closest),
+            (state_then, x, surface_then),
         )
     if dense:
         calls["all_to_all"] = (jax.jit(functools.partial(all_to_all, radius=radius)), (x, surface))
@@ -188,6 +205,7 @@ def main(argv=None) -> int:
     parser.add_argument("--repeats", type=int, default=None, help="timed rounds (200)")
     parser.add_argument("--warmup", type=int, default=5, help="untimed runs of each first")
     parser.add_argument("--out", default=None, help="folder: write search_step.md there")
+    parser.add_argument("--against", help="git revision whose reused step is timed beside")
     args = parser.parse_args(argv)
     repeats = args.repeats or (20 if args.quick else 200)
 
@@ -196,6 +214,8 @@ def main(argv=None) -> int:
         command += f" --repeats {args.repeats}"
     if args.warmup != 5:
         command += f" --warmup {args.warmup}"
+    if args.against:
+        command += f" --against {args.against}"
     lines = [
         "## Search step",
         "",
@@ -206,7 +226,7 @@ def main(argv=None) -> int:
     ]
     for title, scene, skin, dense in scenes(args.quick):
         radius = float(scene.radius)
-        calls, notes = programs(scene, radius, skin, dense)
+        calls, notes = programs(scene, radius, skin, dense, args.against)
         timings = time_interleaved(calls, repeats=repeats, warmup=args.warmup)
         results = {name: jax.block_until_ready(fn(*a)) for name, (fn, a) in calls.items()}
         nodes, segments = scene.x.shape[0], scene.surface.segments.shape[0]

@@ -19,6 +19,13 @@ call ended by ``block_until_ready``; median and 10th-90th percentile):
   thread, and on two unless the process is pinned to one core. It is built
   and searched on every call.
 
+Before anything runs, glibc's allocator is set to keep freed pages
+(``_run.reuse_pages``): with its start values each call's large buffers are
+mapped afresh, at up to 4x the call's time for the dense form at 10^6 nodes
+and 5x for the numba grid on the chip's outline at 10^5, depending on what
+ran before in the process (``benchmarks/malloc.py``). Runs before 0.7.4
+did not set it.
+
 The ratio column is the numba grid's (one thread) median over each form's:
 1 or more meets target 1 (at least as fast). The compile column is the
 trace, lowering and XLA compile of the jitted step (target 2: at most 1 s),
@@ -213,6 +220,9 @@ def main() -> None:
     repeats = args.repeats or (10 if args.quick else 40)
     threads = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else 1
     scenes = QUICK if args.quick else FULL
+    # Both jaxcontact and the numba grid at their best: buffers on reused pages
+    # (benchmarks/malloc.py), whatever ran before in this process.
+    _run.reuse_pages()
     command = "python benchmarks/targets.py" + (" --quick" if args.quick else "")
     header = (
         f"`{command}`; {_run.machine()}; float32; median of {repeats} interleaved rounds "

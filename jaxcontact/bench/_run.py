@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import argparse
 import csv
+import ctypes
+import ctypes.util
 import functools
 import os
 import platform
@@ -259,6 +261,50 @@ def _plain_progress(items, desc):
         yield item
 
 
+# glibc's malloc.h: the two parameters ``reuse_pages`` sets with ``mallopt``.
+M_TRIM_THRESHOLD, M_MMAP_THRESHOLD = -1, -3
+PAGES_REUSED = 1 << 30  # bytes: both thresholds, as MALLOC_MMAP_THRESHOLD_=1073741824 sets them
+_allocator = []  # ``reuse_pages``'s note, for ``machine``'s line
+
+
+def glibc_mallopt():
+    """glibc's ``mallopt``, or None where the C library is not glibc."""
+    try:
+        mallopt = ctypes.CDLL(ctypes.util.find_library("c")).mallopt
+    except (OSError, AttributeError, TypeError):
+        return None
+    mallopt.argtypes, mallopt.restype = (ctypes.c_int, ctypes.c_int), ctypes.c_int
+    return mallopt
+
+
+def set_thresholds(mallopt, threshold: int) -> None:
+    """glibc's mmap and trim thresholds, both to ``threshold`` bytes."""
+    mallopt(M_MMAP_THRESHOLD, threshold)
+    mallopt(M_TRIM_THRESHOLD, threshold)
+
+
+def reuse_pages() -> None:
+    """Has glibc keep freed blocks for the next call (both thresholds 1 GiB), as
+    ``MALLOC_MMAP_THRESHOLD_=1073741824 MALLOC_TRIM_THRESHOLD_=1073741824`` would
+    from a process's start; ``machine``'s line says so from then on.
+
+    With glibc's start values a block of 128 KiB or more is mapped fresh and
+    unmapped at ``free``, so each call's buffers fault their pages in again,
+    and glibc moves the threshold itself as large blocks are freed: a call's
+    time then depends on what ran before it in the process (the numba grid on
+    the chip's outline at 10^4 nodes: 4.4-4.7 ms in a new process, 1.0 ms
+    after a scene of 10^6 nodes). ``benchmarks/malloc.py`` measures both
+    settings; every program ran as fast or faster with pages reused, so the
+    comparisons of peers set it for all of them.
+    """
+    mallopt = glibc_mallopt()
+    if mallopt is None:
+        _allocator[:] = ["glibc's malloc thresholds not set (not glibc)"]
+        return
+    set_thresholds(mallopt, PAGES_REUSED)
+    _allocator[:] = ["glibc's malloc keeps freed pages (mmap and trim thresholds 1 GiB)"]
+
+
 def machine() -> str:
     """One line: the CPU, the cores this process may use, jax and numpy versions."""
     cpu = platform.processor() or platform.machine()
@@ -275,9 +321,14 @@ def machine() -> str:
             cpu += f" (family {fields['cpu family']}, model {fields.get('model', '?')})"
     except OSError:
         pass
-    return (
-        f"{cpu}; {pinned_note()}; python {platform.python_version()}, jax {jax.__version__}, "
-        f"numpy {np.__version__}, {jax.devices()[0].device_kind}"
+    return "; ".join(
+        [
+            cpu,
+            pinned_note(),
+            f"python {platform.python_version()}, jax {jax.__version__}, "
+            f"numpy {np.__version__}, {jax.devices()[0].device_kind}",
+            *_allocator,
+        ]
     )
 
 
@@ -353,6 +404,7 @@ def main(run, description, argv=None, *, slow: bool = False) -> int:
     if slow:
         parser.add_argument("--slow", type=float, default=None, help="s: time slower ones once")
     args = parser.parse_args(argv)
+    reuse_pages()  # every peer at its best (benchmarks/malloc.py)
     jax.config.update("jax_enable_x64", True)  # float64 scenes and variants beside float32
     options = {"slow_s": args.slow} if slow else {}
     print(run(args.quick, args.out, args.repeats, **options))
