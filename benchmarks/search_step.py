@@ -157,6 +157,17 @@ def programs(scene, radius: float, skin: float, dense: bool, revision: str | Non
         f"(a) sizes at radius {radius:g}: {brief(sized_sizes)}; (b), (c) sizes at radius + skin "
         f"{radius + skin:g}, for x and x + ({2 * skin:g}, 0) together: {brief(reused.sizes)}.",
     ]
+    listed = reused.candidates.listed if reused.candidates is not None else None
+    if listed is not None:
+        # The pairs (f) and (g) score: the kept lists (within radius + skin)
+        # against lists built at the radius with the same sizes and cells.
+        at_radius = _bucket.find(x, surface, np.asarray(radius, x.dtype), None, reused.sizes)
+        kept_pairs = int(np.sum(np.asarray(listed.count)))
+        fresh_pairs = int(np.sum(np.asarray(at_radius.listed.count)))
+        notes.append(
+            f"(b)'s kept lists hold {kept_pairs:,} (slave, segment) pairs; the same sizes' "
+            f"lists built at the radius, {fresh_pairs:,} ({kept_pairs / fresh_pairs:.2f}x)."
+        )
     if reused.candidates is not None:
         notes.append(
             f"(c) re-finds by a stale state: allocated at x + ({2 * skin:g}, 0), called on x "

@@ -111,3 +111,39 @@ def test_a_batch_shares_its_nodes_and_segments_and_masks_its_segments_per_scene(
         assert_same_contact(jax.tree.map(lambda v, b=b: v[b], contacts), expected, 0.1)
     with pytest.raises(ValueError, match="surface.mask must be shared by the batch"):
         search.allocate(xs, Surface(nodes[2], segments, jnp.ones((3, 20), bool)))
+
+
+def test_the_skin_check_names_each_reason_and_ignores_what_padding_held():
+    """``expired`` bit by bit (one pass over the rows since 0.7.4): a row that
+    becomes real is new, whatever its padding held; a real row moved past the
+    skin, or so far that its squared move overflows, moved; a masked row, or
+    one not finite (not real), may change freely."""
+    scene = cutting_scene(500, 18.0, dtype=FLOAT)
+    mask = np.ones(scene.x.shape[0], bool)
+    mask[7] = False
+    x = np.asarray(scene.x).copy()
+    x[7] = (1e6, -1e6)  # padding: anything
+    search = Search(radius=0.1, skin=0.05, method="binned")
+    state = search.allocate(jnp.asarray(x), scene.surface, mask=jnp.asarray(mask))
+    step = jax.jit(search.closest)
+
+    def reasons(x, mask):
+        _, after = step(state, jnp.asarray(x, FLOAT), scene.surface, mask=jnp.asarray(mask))
+        return after.rebuild_reasons()
+
+    assert reasons(x, mask) == []
+    padded = x.copy()
+    padded[7] = (np.nan, 3.0)  # a masked row changes freely
+    assert reasons(padded, mask) == []
+    moved = x.copy()
+    moved[3, 0] += 0.06  # one real row, past the skin
+    assert reasons(moved, mask) == ["the slaves and the master moved more than the skin"]
+    far = x.copy()
+    far[3] = (3e38, -3e38)  # a real row whose squared move overflows to inf
+    assert reasons(far, mask) == ["the slaves and the master moved more than the skin"]
+    lost = x.copy()
+    lost[3] = (np.nan, 0.0)  # a row that is not finite is not real: dropped, as padding
+    assert reasons(lost, mask) == []
+    joined = x.copy()
+    joined[7] = np.asarray(scene.x)[7]  # far from its padding, and real now
+    assert reasons(joined, np.ones_like(mask)) == ["a slave row became real"]

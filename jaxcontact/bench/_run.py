@@ -277,10 +277,11 @@ def glibc_mallopt():
     return mallopt
 
 
-def set_thresholds(mallopt, threshold: int) -> None:
-    """glibc's mmap and trim thresholds, both to ``threshold`` bytes."""
-    mallopt(M_MMAP_THRESHOLD, threshold)
-    mallopt(M_TRIM_THRESHOLD, threshold)
+def set_thresholds(mallopt, threshold: int) -> bool:
+    """glibc's mmap and trim thresholds, both to ``threshold`` bytes; whether
+    glibc took both (``mallopt`` returns 0 for a value it refuses: glibc
+    before 2.26 caps the mmap threshold at 32 MiB)."""
+    return bool(mallopt(M_MMAP_THRESHOLD, threshold)) & bool(mallopt(M_TRIM_THRESHOLD, threshold))
 
 
 def reuse_pages() -> None:
@@ -301,7 +302,9 @@ def reuse_pages() -> None:
     if mallopt is None:
         _allocator[:] = ["glibc's malloc thresholds not set (not glibc)"]
         return
-    set_thresholds(mallopt, PAGES_REUSED)
+    if not set_thresholds(mallopt, PAGES_REUSED):
+        _allocator[:] = ["glibc refused the malloc thresholds (pages not kept)"]
+        return
     _allocator[:] = ["glibc's malloc keeps freed pages (mmap and trim thresholds 1 GiB)"]
 
 
