@@ -36,7 +36,7 @@ Checks: every ``Search`` answer is compared with the whole-search dense
 form's (``segment`` and ``found``, row for row, the compact form through
 ``to_contact``): "equal", or the rows that differ and how close their gaps
 are (on the rough die at 10^6 x 10^5 the compact form picked the other
-segment at a vertex for 1 of 86,890 found slaves, the two gaps equal to
+segment at a vertex for 1 slave, the two gaps equal to
 2e-9 in float32: the two programs round the pair distance in differently
 fused loops). The numba grid's answer equals it on ``found`` and
 ``segment`` but for exact vertex ties (its rule is the lower index). On the
