@@ -300,8 +300,10 @@ def finite_rows(points: Array) -> Array:
 
 
 def squared_norm(vectors: Array) -> Array:
-    """f[...]: ``x^2 + y^2`` of each vector (f[..., 2]), the same number as
-    ``jnp.sum(vectors**2, axis=-1)``.
+    """f[...]: ``x^2 + y^2`` of each vector (f[..., 2]): what
+    ``jnp.sum(vectors**2, axis=-1)`` computes, to rounding (XLA may fuse the
+    multiply and the add). Used only where a last bit does not matter (the
+    skin check's threshold, the self-contact window of a path).
 
     Written per column: XLA's CPU code runs ``jnp.sum(..., axis=-1)`` over a
     length-2 axis as a loop per row; the skin check (``_bucket.expired``,
