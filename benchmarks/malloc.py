@@ -43,12 +43,11 @@ import sys
 import jax
 import numpy as np
 
-from jaxcontact import Search
 from jaxcontact.bench import _run
 from jaxcontact.bench.timing import _elapsed
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
-from targets import FULL, QUICK, build, step  # noqa: E402
+from targets import QUICK, WITHOUT_LARGEST_DIE, build, numba_closest, whole_search_steps  # noqa: E402
 from threads import same  # noqa: E402
 
 SETTINGS = {"fresh pages": 128 * 1024, "pages reused": _run.PAGES_REUSED}
@@ -58,13 +57,11 @@ NUMBA = "numba grid (1 thread)"
 
 def run_scene(mallopt, kind: str, size: int, parameter, repeats: int) -> list[str]:
     x, surface, radius, pair = build(kind, size, parameter)
-    programs = {}
-    for compact in (False, True):
-        search = Search(radius=radius, compact=compact, self_contact=bool(pair))
-        jitted, args = step(search, x, surface, pair)
-        programs["compact" if compact else "dense"] = (jitted.lower(*args).compile(), args)
-    start, end = _run.endpoints(surface)
-    peer = _run.numba_peer("closest", 1, x.dtype, (np.asarray(x), start, end), radius=radius)
+    programs = {
+        form: (jitted.lower(*args).compile(), args)
+        for form, (jitted, args) in whole_search_steps(x, surface, radius, pair).items()
+    }
+    peer = numba_closest(x, surface, radius)
     if not isinstance(peer, str):
         programs[NUMBA] = peer
     samples = {(name, setting): [] for name in programs for setting in SETTINGS}
@@ -103,9 +100,7 @@ def main(argv=None) -> int:
         print("Not run: this C library has no mallopt (glibc's).")
         return 0
     repeats = args.repeats or (10 if args.quick else 30)
-    scenes = (
-        QUICK if args.quick else [s for s in FULL if not (s[0] == "rough die" and s[1] > 10**5)]
-    )
+    scenes = QUICK if args.quick else WITHOUT_LARGEST_DIE
     command = "python benchmarks/malloc.py" + " --quick" * args.quick
     print(
         f"`{command}`; {_run.machine()}; float32; median of {repeats} rounds "

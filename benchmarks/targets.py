@@ -85,6 +85,8 @@ QUICK = (
     ("rough die", 10_000, 1_000),
     ("chip outline, self-contact", 10_000, None),
 )
+# FULL without the rough die at 10^6 x 10^5: benchmarks/threads.py's and malloc.py's scenes.
+WITHOUT_LARGEST_DIE = tuple(s for s in FULL if not (s[0] == "rough die" and s[1] > 10**5))
 NUMBA = "numba grid (1 thread)"
 NUMBA2 = "numba grid (2 threads)"
 
@@ -110,6 +112,24 @@ def step(search: Search, x, surface, pair):
         return search.closest(state, x, surface, **pair)[0]
 
     return jax.jit(closest), (state, x, surface, pair)
+
+
+def whole_search_steps(x, surface, radius, pair) -> dict:
+    """``{"dense" | "compact": (jitted step, args)}``: the whole search (``skin=0``)
+    in both result forms (``step``)."""
+    return {
+        "compact" if compact else "dense": step(
+            Search(radius=radius, compact=compact, self_contact=bool(pair)), x, surface, pair
+        )
+        for compact in (False, True)
+    }
+
+
+def numba_closest(x, surface, radius, threads: int = 1):
+    """The numba grid's closest query on ``threads``: ``_run.numba_peer``'s
+    ``(fn, args)``, or why it cannot run (a str)."""
+    start, end = _run.endpoints(surface)
+    return _run.numba_peer("closest", threads, x.dtype, (np.asarray(x), start, end), radius=radius)
 
 
 def _rows(result, num_rows: int):
@@ -144,13 +164,10 @@ def run_scene(kind: str, size: int, parameter, repeats: int, threads: int) -> li
             search = Search(radius=radius, skin=skin, compact=compact, self_contact=self_contact)
             form = "compact" if compact else "dense"
             calls[f"Search.closest, {how}, {form}"] = step(search, x, surface, pair)
-    start, end = _run.endpoints(surface)
     for name, count in ((NUMBA, 1), (NUMBA2, 2)):
         if count > threads:
             continue
-        peer = _run.numba_peer(
-            "closest", count, x.dtype, (np.asarray(x), start, end), radius=radius
-        )
+        peer = numba_closest(x, surface, radius, count)
         if isinstance(peer, str):
             print(f"{name}: {peer}", file=sys.stderr)
             continue

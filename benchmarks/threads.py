@@ -37,12 +37,11 @@ import sys
 import jax
 import numpy as np
 
-from jaxcontact import Search
 from jaxcontact.bench import _run
 from jaxcontact.bench.timing import time_interleaved
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
-from targets import FULL, QUICK, build, step  # noqa: E402
+from targets import QUICK, WITHOUT_LARGEST_DIE, build, numba_closest, whole_search_steps  # noqa: E402
 
 ONE_THREAD = {"xla_disable_hlo_passes": "cpu-parallel-task-assigner"}
 SPLIT, ALONE = "XLA's threads", "one thread"
@@ -63,17 +62,13 @@ def same(first, second) -> str:
 def run_scene(kind: str, size: int, parameter, repeats: int) -> list[str]:
     x, surface, radius, pair = build(kind, size, parameter)
     calls, parts = {}, {}
-    for compact in (False, True):
-        search = Search(radius=radius, compact=compact, self_contact=bool(pair))
-        jitted, args = step(search, x, surface, pair)
+    for form, (jitted, args) in whole_search_steps(x, surface, radius, pair).items():
         lowered = jitted.lower(*args)
-        form = "compact" if compact else "dense"
         for label, options in ((SPLIT, None), (ALONE, ONE_THREAD)):
             executable = lowered.compile(compiler_options=options)
             parts[(form, label)] = executable.as_text().count('"outer_dimension_partitions":["')
             calls[(form, label)] = (executable, args)
-    start, end = _run.endpoints(surface)
-    peer = _run.numba_peer("closest", 1, x.dtype, (np.asarray(x), start, end), radius=radius)
+    peer = numba_closest(x, surface, radius)
     if not isinstance(peer, str):
         calls["numba"] = peer
     timings = time_interleaved(calls, repeats=repeats, warmup=2)
@@ -98,9 +93,7 @@ def main(argv=None) -> int:
     parser.add_argument("--repeats", type=int, default=None, help="timed rounds (40)")
     args = parser.parse_args(argv)
     repeats = args.repeats or (10 if args.quick else 40)
-    scenes = (
-        QUICK if args.quick else [s for s in FULL if not (s[0] == "rough die" and s[1] > 10**5)]
-    )
+    scenes = QUICK if args.quick else WITHOUT_LARGEST_DIE
     _run.reuse_pages()  # as benchmarks/targets.py does
     command = "python benchmarks/threads.py" + " --quick" * args.quick
     print(
