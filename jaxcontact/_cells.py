@@ -21,7 +21,7 @@ import jax
 import jax.numpy as jnp
 
 from jaxcontact._broad import Box, enclosing
-from jaxcontact._sort import stable_order
+from jaxcontact._sort import sorted_pairs, stable_order
 from jaxcontact._types import Array
 
 if TYPE_CHECKING:
@@ -89,8 +89,12 @@ def bin_segments(
         jnp.arange(num_segments, dtype=jnp.int32)[:, None, None], inside.shape
     ).reshape(-1)
     count = jax.ops.segment_sum(jnp.ones_like(cell), cell, num_segments=num_cells + 1)
-    # A stable sort keeps each cell's segments in increasing order.
-    order = segment[stable_order(cell, num_cells + 1)]
+    # Each cell's segments in increasing order: a segment is in a cell once,
+    # so one sort of packed (cell, segment) pairs where they fit in int32;
+    # else a stable sort of the cells (the entries run segment by segment).
+    order = sorted_pairs(cell, segment, num_segments, num_cells + 1)
+    if order is None:
+        order = segment[stable_order(cell, num_cells + 1)]
     start = jnp.cumsum(count) - count
     too_full = jnp.max(count[:num_cells], initial=0) > capacity
     # The last "cell" gathers the unused entries; a point there must see none.
