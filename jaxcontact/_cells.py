@@ -11,6 +11,13 @@ negative coordinates, or for points exactly on a boundary.
 
 All sizes are static: a segment may span at most ``span`` cells per axis and
 a cell hold at most ``capacity`` segments; beyond either, ``overflow`` is set.
+
+Where a grid of cells of the natural edge would hold many more cells than
+there are slaves (an outline that winds through a wide, mostly empty box:
+self-contact, several bodies), the cells keep their edge and share a fixed
+number of lists through a spatial hash (``buckets``), instead of growing until
+the grid is small: lists then hold the segments near a cell, not those of a
+cell many times wider.
 """
 
 from __future__ import annotations
@@ -53,13 +60,36 @@ def cell_of(points: Array, grid: Grid, shape: tuple[int, int]) -> Array:
     return jnp.clip(index, 0, upper).astype(jnp.int32)
 
 
-def flat_cell(cell: Array, shape: tuple[int, int]) -> Array:
-    """i32[...]: row-major number of a cell given as (ix, iy)."""
-    return cell[..., 1] * shape[0] + cell[..., 0]
+def flat_cell(cell: Array, shape: tuple[int, int], buckets: int = 0) -> Array:
+    """i32[...]: the list of a cell given as (ix, iy): its row-major number,
+    or with ``buckets`` its spatial hash into that many lists.
+
+    The hash is Teschner et al.'s (2003, "Optimized Spatial Hashing for
+    Collision Detection of Deformable Objects", VMV): ``(ix * 73856093) xor
+    (iy * 19349663) mod buckets``, in uint32 arithmetic. Cells that share a
+    list only lengthen it: a point still meets every segment registered in
+    its own cell, and the pair's score rejects the others.
+    """
+    if not buckets:
+        return cell[..., 1] * shape[0] + cell[..., 0]
+    ix = cell[..., 0].astype(jnp.uint32) * jnp.uint32(73856093)
+    iy = cell[..., 1].astype(jnp.uint32) * jnp.uint32(19349663)
+    return ((ix ^ iy) % jnp.uint32(buckets)).astype(jnp.int32)
+
+
+def num_lists(shape: tuple[int, int], buckets: int = 0) -> int:
+    """Cell lists of a grid: one per cell, or ``buckets`` where cells are hashed."""
+    return buckets or shape[0] * shape[1]
 
 
 def bin_segments(
-    boxes: Box, ok: Array, grid: Grid, shape: tuple[int, int], span: tuple[int, int], capacity: int
+    boxes: Box,
+    ok: Array,
+    grid: Grid,
+    shape: tuple[int, int],
+    span: tuple[int, int],
+    capacity: int,
+    buckets: int = 0,
 ) -> Bins:
     """Registers every ``ok`` segment in each cell its box touches.
 
@@ -69,9 +99,11 @@ def bin_segments(
       grid: the grid's placement.
       shape: static (cells in x, cells in y).
       span: static most cells a segment may cover per axis.
-      capacity: static most segments a cell may hold.
+      capacity: static most segments a cell's list may hold.
+      buckets: static; 0 gives each cell its own list, more hashes the
+        cells into that many lists (``flat_cell``).
     """
-    num_cells = shape[0] * shape[1]
+    num_cells = num_lists(shape, buckets)
     num_segments = ok.shape[0]
     safe = ok[:, None]
     low = cell_of(jnp.where(safe, boxes.low, grid.origin), grid, shape)
@@ -84,7 +116,8 @@ def bin_segments(
     inside = (
         ok[:, None, None] & (cell_x <= high[:, 0, None, None]) & (cell_y <= high[:, 1, None, None])
     )
-    cell = jnp.where(inside, cell_y * shape[0] + cell_x, num_cells).reshape(-1)
+    listed = flat_cell(jnp.stack(jnp.broadcast_arrays(cell_x, cell_y), axis=-1), shape, buckets)
+    cell = jnp.where(inside, listed, num_cells).reshape(-1)
     segment = jnp.broadcast_to(
         jnp.arange(num_segments, dtype=jnp.int32)[:, None, None], inside.shape
     ).reshape(-1)
@@ -146,7 +179,8 @@ def list_candidates(query: Array, ok: Array, segments: Segments, boxes: Box, siz
     # The grid always covers the region: cells grow when the region does.
     cell_size = jnp.maximum(sizes.cell_size, jnp.max(extent / jnp.asarray(shape, query.dtype)))
     grid = Grid(origin, cell_size.astype(query.dtype))
-    bins = bin_segments(boxes, segments.ok, grid, shape, sizes.span, sizes.cell_capacity)
-    no_cell = shape[0] * shape[1]
-    cells = jnp.where(ok, flat_cell(cell_of(query, grid, shape), shape), no_cell)
+    buckets = sizes.buckets
+    bins = bin_segments(boxes, segments.ok, grid, shape, sizes.span, sizes.cell_capacity, buckets)
+    no_cell = num_lists(shape, buckets)
+    cells = jnp.where(ok, flat_cell(cell_of(query, grid, shape), shape, buckets), no_cell)
     return cell_lists(cells, bins), bins.overflow

@@ -51,8 +51,11 @@ class Sizes:
       grid_shape: cells in x and in y.
       cell_size: smallest cell edge; cells grow when the region outgrows the grid.
       span: most cells a segment's inflated box may cover, in x and in y.
-      cell_capacity: most segments one cell may hold.
+      cell_capacity: most segments one cell's list may hold.
       chunk_rows: kept slaves searched together, longest cell lists first.
+      buckets: 0 gives each of the ``grid_shape`` cells its own list; more
+        hashes the cells into that many lists (a grid of that many more
+        cells than slaves would otherwise need wider cells).
       contact_capacity: entries of the compact result (``ContactList``,
         ``Search(compact=True)``); 0 (the default) returns the dense
         ``Contact`` of N rows.
@@ -69,6 +72,7 @@ class Sizes:
     cell_capacity: int = 1
     chunk_rows: int = CHUNK_ROWS
     contact_capacity: int = 0
+    buckets: int = 0
 
     @property
     def slave_capacity(self) -> int:
@@ -137,10 +141,10 @@ def _measure(x_prev, x, surface, radius, mask, block_size: int, num_blocks: int)
     )
 
 
-@functools.partial(jax.jit, static_argnames=("shape", "span"))
-def _fullest_cell(boxes: Box, ok: Array, grid: Grid, shape, span) -> Array:
-    """i32[]: the most segments in one cell."""
-    bins = bin_segments(boxes, ok, grid, shape, span, ok.shape[0])
+@functools.partial(jax.jit, static_argnames=("shape", "span", "buckets"))
+def _fullest_cell(boxes: Box, ok: Array, grid: Grid, shape, span, buckets) -> Array:
+    """i32[]: the most segments in one cell's list."""
+    bins = bin_segments(boxes, ok, grid, shape, span, ok.shape[0], buckets)
     return jnp.max(bins.count, initial=0)
 
 
@@ -224,18 +228,30 @@ def measure(
     high = np.minimum(np.asarray(measured.master.high), points.max(axis=0))
     extent = np.maximum(high - low, 0.0)
     lengths = np.asarray(measured.extents)[ok]
+    # Keep the lists O(slaves kept): no more than 4 per kept slave.
+    most_cells = max(64, 4 * len(points))
+    buckets = 0
     if cell_size is None:
         cell_size = cell_factor * (2 * float(measured.reach) + float(np.median(lengths)))
-        # Keep the grid O(slaves kept): no more cells than 4 per kept slave.
-        most_cells = max(64, 4 * len(points))
-        while np.prod(np.ceil(extent * slack / cell_size) + 1) > most_cells:
-            cell_size *= 1.25
+        if np.prod(np.ceil(extent * slack / cell_size) + 1) > most_cells:
+            # Too many cells of this edge: they share that many lists through
+            # a hash (``_cells.flat_cell``), and are made ``slack`` times
+            # wider, so that a segment of the median extent spans at most two
+            # per axis. Growing the cells instead until the grid fitted gave
+            # the curled chip's outline at 10^5 nodes cells 24 times its
+            # radius and 54 segments per list.
+            cell_size *= slack
+            buckets = size_class(most_cells)
         cell_size = _edge_class(cell_size)
     grid_shape = tuple(size_class(int(v)) for v in np.ceil(extent * slack / cell_size) + 1)
+    if not buckets and np.prod(grid_shape) > most_cells:
+        buckets = size_class(most_cells)
     widths = (np.asarray(measured.boxes.high) - np.asarray(measured.boxes.low))[ok]
     span = tuple(size_class(int(math.ceil(w * slack / cell_size)) + 1) for w in widths.max(axis=0))
     grid = Grid(jnp.asarray(low, x.dtype), jnp.asarray(cell_size, x.dtype))
-    most_per_cell = int(_fullest_cell(measured.boxes, measured.segment_ok, grid, grid_shape, span))
+    most_per_cell = int(
+        _fullest_cell(measured.boxes, measured.segment_ok, grid, grid_shape, span, buckets)
+    )
     return Sizes(
         num_slaves=num_rows,
         block_size=block_size,
@@ -247,6 +263,7 @@ def measure(
         span=span,
         cell_capacity=grow(most_per_cell, slack),
         chunk_rows=chunk_rows,
+        buckets=buckets,
     )
 
 
@@ -265,6 +282,7 @@ def largest(first: Sizes, second: Sizes) -> Sizes:
         span=tuple(map(max, first.span, second.span)),
         cell_capacity=max(first.cell_capacity, second.cell_capacity),
         contact_capacity=max(first.contact_capacity, second.contact_capacity),
+        buckets=max(first.buckets, second.buckets),
     )
 
 

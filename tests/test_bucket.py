@@ -29,7 +29,7 @@ from jaxcontact import (
     swept,
 )
 from jaxcontact._sizes import CHUNK_ROWS, largest, measure
-from jaxcontact.scenes import cutting_scene, paper_scene, rough_die_scene
+from jaxcontact.scenes import curling_chip, cutting_scene, paper_scene, rough_die_scene
 from tests.helpers import (
     FLOAT,
     MODE_DTYPES,
@@ -249,8 +249,10 @@ CELL_SIZE = 0.4
 SCALES = (8.0, 1.0, 0.125)  # cells of 0.05, 0.4 and 3.2 in the drawn scene's units
 
 
-def fixed_sizes(for_paths):
-    """Blocks of 8 with room for all; a 16 x 16 grid; spans and cells that cannot overflow."""
+def fixed_sizes(for_paths, buckets=0):
+    """Blocks of 8 with room for all; a 16 x 16 grid; spans and cells that cannot
+    overflow. ``buckets`` hashes the 256 cells into that many lists: with 7,
+    most lists are shared by many cells and hold some segments more than once."""
     return Sizes(
         num_slaves=MAX_SLAVES,
         block_size=8,
@@ -260,7 +262,8 @@ def fixed_sizes(for_paths):
         grid_shape=(16, 16),
         cell_size=CELL_SIZE,
         span=(16, 16),
-        cell_capacity=MAX_NODES,
+        cell_capacity=MAX_NODES * (16 * 16 if buckets else 1),
+        buckets=buckets,
     )
 
 
@@ -293,11 +296,13 @@ def polyline_scenes(draw, dtype):
 @given(
     st.sampled_from(MODE_DTYPES).flatmap(polyline_scenes),
     st.sampled_from([0.0, 0.05, 0.3, 1.0]),
+    st.sampled_from([0, 7]),
 )
-def test_bucket_sort_equals_all_to_all_on_random_polylines(scaled_scene, radius):
+def test_bucket_sort_equals_all_to_all_on_random_polylines(scaled_scene, radius, buckets):
     (x, surface, mask), scale = scaled_scene
     radius *= scale
-    binned = jit_sized_sort(x, surface, radius=radius, mask=mask, sizes=fixed_sizes(False))
+    sizes = fixed_sizes(False, buckets)
+    binned = jit_sized_sort(x, surface, radius=radius, mask=mask, sizes=sizes)
     assert_same_contact(
         binned, jit_all_to_all(x, surface, radius=radius, mask=mask), radius, degenerate=True
     )
@@ -306,11 +311,13 @@ def test_bucket_sort_equals_all_to_all_on_random_polylines(scaled_scene, radius)
 @given(
     st.sampled_from(MODE_DTYPES).flatmap(polyline_scenes),
     st.tuples(st.floats(-1, 1), st.floats(-1, 1)),
+    st.sampled_from([0, 7]),
 )
-def test_bucket_swept_equals_swept_on_random_polylines(scaled_scene, move):
+def test_bucket_swept_equals_swept_on_random_polylines(scaled_scene, move, buckets):
     (x_prev, surface, mask), scale = scaled_scene
     x = x_prev + jnp.asarray(move, x_prev.dtype)[None] * scale
-    binned = jit_sized_swept(x_prev, x, surface, mask=mask, sizes=fixed_sizes(True))
+    sizes = fixed_sizes(True, buckets)
+    binned = jit_sized_swept(x_prev, x, surface, mask=mask, sizes=sizes)
     assert_same_crossing(binned, jit_swept(x_prev, x, surface, mask=mask), degenerate=True)
 
 
@@ -321,6 +328,23 @@ def test_sizes_fields():
     assert sizes.slave_capacity == sizes.block_capacity * sizes.block_size
     assert sizes.grid_shape[0] > 1 and sizes.cell_capacity >= 1
     assert sizes.chunk_rows == CHUNK_ROWS
+
+
+def test_an_outline_in_a_wide_box_hashes_its_cells_and_finds_what_all_to_all_does():
+    """The curled chip's outline winds through a box of mostly empty cells:
+    ``measure`` keeps cells near its radius and hashes them into lists, where
+    a grid that fitted would have cells many times wider."""
+    scene = curling_chip(3_000)
+    sizes = measure(scene.x, scene.surface, radius=scene.radius)
+    assert sizes.use_cells and sizes.buckets > 0
+    assert sizes.cell_size < 8 * scene.radius
+    assert sizes.buckets < sizes.grid_shape[0] * sizes.grid_shape[1]
+    pair = {"slave_node": scene.slave_node, "self_contact": True}
+    binned = sized_bucket_sort(scene.x, scene.surface, radius=scene.radius, sizes=sizes, **pair)
+    dense = all_to_all(scene.x, scene.surface, radius=scene.radius, **pair)
+    assert not bool(binned.overflow)
+    assert_same_contact(binned, dense, scene.radius)
+    assert np.asarray(dense.active).sum() > 0
 
 
 @pytest.mark.parametrize("name", ["cutting", "rough_die"])
