@@ -19,4 +19,4 @@ from jaxcontact._types import Surface as Surface
 from jaxcontact._validate import validate as validate
 from jaxcontact.forces import contact_forces as contact_forces
 
-__version__ = "0.7.4"
+__version__ = "0.7.5"
