@@ -440,7 +440,8 @@ def cells(sizes):
     if not sizes.use_cells:
         return "no cells"
     shape = "x".join(map(str, sizes.grid_shape))
-    return f"{shape} cells of {sizes.cell_size:.3g}, at most {sizes.cell_capacity} segments"
+    hashed = f" hashed into {sizes.buckets:,} lists" if sizes.buckets else ""
+    return f"{shape} cells of {sizes.cell_size:.3g}{hashed}, at most {sizes.cell_capacity} segments"
 
 
 def split(scene):

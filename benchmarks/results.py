@@ -77,6 +77,7 @@ SECTIONS = {
     ),
     "stages": Section("Where the bucket sort's time goes", "stages.py"),
     "counting_sort": Section("Counting sorts against the sort (issue 25)", "counting_sort.py"),
+    "sorts": Section("Sorts whose keys outgrow int32 (issue 25)", "sorts.py"),
     "compile_ops": Section("What a compile costs, kernel by kernel (issue 25)", "compile_ops.py"),
     "targets": Section(
         "Issue 25's targets: Search.closest against the numba grid",

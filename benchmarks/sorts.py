@@ -11,8 +11,8 @@ Keys come from the reference scenes themselves (float32, ``docs/scenes.md``),
 computed as the searches compute them, with the sizes ``measure`` picks:
 
 - cell entries: each segment's entry in each of the ``span`` cells around its
-  radius-inflated box ("no cell" past its box), sorted by cell
-  (``_cells.bin_segments``);
+  radius-inflated box ("no cell" past its box), sorted by the cell's list
+  (its number, or its hash where the sizes hash the cells; ``_cells.bin_segments``);
 - node keys: each segment's end node (``_outline.vertex_neighbours`` sorts
   those of the real segments, as ``node + 1``, against ``num_nodes + 1`` values).
 
@@ -34,7 +34,7 @@ import numpy as np
 
 from jaxcontact import _inputs
 from jaxcontact._broad import segment_boxes
-from jaxcontact._cells import Grid, cell_of, flat_cell
+from jaxcontact._cells import Grid, cell_of, flat_cell, num_lists
 from jaxcontact._sizes import measure
 from jaxcontact._sort import sorted_pairs, stable_order
 from jaxcontact.bench import _run
@@ -54,7 +54,8 @@ QUICK = {
 
 
 def cell_entries(scene):
-    """``(cell i32[E], segment i32[E], cells)``: the binning's keys at ``measure``'s sizes."""
+    """``(cell i32[E], segment i32[E], lists)``: the binning's keys at ``measure``'s
+    sizes (the cell's list: its number, or its hash where ``sizes.buckets``)."""
     sizes = measure(scene.x, scene.surface, radius=scene.radius)
     segments = _inputs.resolve_segments(scene.surface)
     boxes = segment_boxes(segments, jnp.asarray(scene.radius, scene.x.dtype))
@@ -64,13 +65,13 @@ def cell_entries(scene):
     shape = sizes.grid_shape
     low = np.asarray(cell_of(boxes.low, grid, shape))
     high = np.asarray(cell_of(boxes.high, grid, shape))
-    num_cells = shape[0] * shape[1]
+    num_cells = num_lists(shape, sizes.buckets)
     cells, owners = [], []
     for dx in range(sizes.span[0]):
         for dy in range(sizes.span[1]):
             at = low + np.asarray([dx, dy])
             inside = ok & np.all(at <= high, axis=-1)
-            flat = np.asarray(flat_cell(jnp.asarray(at), shape))
+            flat = np.asarray(flat_cell(jnp.asarray(at), shape, sizes.buckets))
             cells.append(np.where(inside, flat, num_cells))
             owners.append(np.arange(len(ok)))
     # Entries run segment by segment, as ``bin_segments`` lays them out.
@@ -102,7 +103,7 @@ def rows(name: str, scene, repeats: int) -> list[str]:
         f"{name}: cell entries",
         (cell, segment),
         forms,
-        f"{len(cell):,} entries, {num_cells:,} cells",
+        f"{len(cell):,} entries, {num_cells:,} lists",
         repeats,
     )
     keys, values = node_keys(scene)
