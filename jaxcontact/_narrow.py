@@ -137,23 +137,23 @@ def search_listed(kernel, rows, segments: Segments, listed: CellLists, sizes: Si
     length = jnp.clip(listed.count, 0, capacity)
     order = stable_order(capacity - length, capacity + 1)
 
-    def arrange(values):
-        """Rows in search order, padded with zeros (empty lists) to whole chunks."""
-        return jnp.pad(values[order], ((0, pad),) + ((0, 0),) * (values.ndim - 1))
-
-    first, count = arrange(listed.first), arrange(listed.count)
-    rows = jax.tree.map(arrange, rows)
-    longest = count[::chunk_rows]  # each chunk's longest list comes first
+    # Rows in search order, padded to whole chunks with rows past the end
+    # (empty lists). Each chunk gathers its own rows: the chunks after the
+    # first of empty lists are never read, so gathering every kept row in
+    # this order up front was work for rows no chunk searched.
+    order = jnp.pad(order, (0, pad), constant_values=num_rows)
+    heads = order[::chunk_rows]
+    # Each chunk's longest list comes first.
+    longest = jnp.where(heads < num_rows, length[jnp.minimum(heads, num_rows - 1)], 0)
 
     def search_chunk(state):
         chunk, found = state
         at = chunk * chunk_rows
-
-        def part(values):
-            return jax.lax.dynamic_slice_in_dim(values, at, chunk_rows)
-
-        lists = CellLists(part(first), part(count), listed.order)
-        pair_value = vmapped(kernel, *jax.tree.map(part, rows))
+        index = jax.lax.dynamic_slice_in_dim(order, at, chunk_rows)
+        real, index = index < num_rows, jnp.minimum(index, num_rows - 1)
+        count = jnp.where(real, listed.count[index], 0)
+        lists = CellLists(listed.first[index], count, listed.order)
+        pair_value = vmapped(kernel, *jax.tree.map(lambda values: values[index], rows))
         chosen = _search_rows(pair_value, segments, lists, capacity, dtype)
         found = tuple(
             jax.lax.dynamic_update_slice_in_dim(whole, new, at, 0)
@@ -168,6 +168,7 @@ def search_listed(kernel, rows, segments: Segments, listed: CellLists, sizes: Si
     padded = num_chunks * chunk_rows
     found = (jnp.full((padded,), -1, jnp.int32), jnp.full((padded,), jnp.inf, dtype))
     _, (choice, best) = jax.lax.while_loop(more, search_chunk, (jnp.zeros((), jnp.int32), found))
+    order = order[:num_rows]
     choice = jnp.full((num_rows,), -1, jnp.int32).at[order].set(choice[:num_rows])
     return choice, jnp.full((num_rows,), jnp.inf, dtype).at[order].set(best[:num_rows])
 
