@@ -74,6 +74,12 @@ class Sizes:
     contact_capacity: int = 0
     buckets: int = 0
 
+    def __post_init__(self):
+        if isinstance(self.buckets, bool) or not isinstance(self.buckets, int) or self.buckets < 0:
+            raise ValueError(
+                f"Sizes.buckets must be an int >= 0 (0: a list per cell); got {self.buckets!r}"
+            )
+
     @property
     def slave_capacity(self) -> int:
         """Slaves the narrow phase holds: ``block_capacity * block_size``."""

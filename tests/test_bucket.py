@@ -347,6 +347,12 @@ def test_an_outline_in_a_wide_box_hashes_its_cells_and_finds_what_all_to_all_doe
     assert np.asarray(dense.active).sum() > 0
 
 
+@pytest.mark.parametrize("buckets", [-1, 2.5, True])
+def test_sizes_refuse_buckets_that_are_no_count(buckets):
+    with pytest.raises(ValueError, match=r"Sizes.buckets must be an int >= 0"):
+        dataclasses.replace(fixed_sizes(False), buckets=buckets)
+
+
 @pytest.mark.parametrize("name", ["cutting", "rough_die"])
 def test_candidates_reused_over_steps_equal_a_fresh_search_until_expired(name):
     """The tool advances step by step; candidates found once serve while within
