@@ -122,9 +122,11 @@ def bin_segments(
         jnp.arange(num_segments, dtype=jnp.int32)[:, None, None], inside.shape
     ).reshape(-1)
     count = jax.ops.segment_sum(jnp.ones_like(cell), cell, num_segments=num_cells + 1)
-    # Each cell's segments in increasing order: a segment is in a cell once,
-    # so one sort of packed (cell, segment) pairs where they fit in int32;
-    # else a stable sort of the cells (the entries run segment by segment).
+    # Each cell's segments in increasing order: a segment is in a cell once
+    # (in a list shared by hashed cells it may be twice: two equal entries,
+    # harmless), so one sort of packed (cell, segment) pairs where they fit
+    # in int32; else a stable sort of the cells (the entries run segment by
+    # segment).
     order = sorted_pairs(cell, segment, num_segments, num_cells + 1)
     if order is None:
         order = segment[stable_order(cell, num_cells + 1)]

@@ -168,6 +168,7 @@ def measure(
     cell_factor: float = 1.0,
     cell_size: float | None = None,
     chunk_rows: int = CHUNK_ROWS,
+    layout: Sizes | None = None,
 ) -> Sizes:
     """Sizes a bucket sort for this configuration, with room to spare.
 
@@ -186,9 +187,15 @@ def measure(
       cells_above: the segment count above which cells are used by default.
       cell_factor: cell edge as a multiple of (twice the search distance plus
         the median segment extent).
-      cell_size: the cell edge itself, instead of one chosen from the data
-        (``measure_batch`` sizes every scene of a batch at one edge).
+      cell_size: the cell edge itself, instead of one chosen from the data;
+        a grid of more than four cells per kept slave then hashes them into
+        lists at that edge (not widened).
       chunk_rows: kept slaves searched together.
+      layout: sizes whose cells (edge, grid, buckets) to keep, instead of
+        choosing them: the cell capacity and span are then measured for the
+        grid the search places with those cells on this configuration (the
+        cells grow where its region outgrows the grid). For sizes merged
+        from measurements at other cells (``largest``): ``fitted``.
 
     Returns:
       ``Sizes``.
@@ -237,7 +244,12 @@ def measure(
     # Keep the lists O(slaves kept): no more than 4 per kept slave.
     most_cells = max(64, 4 * len(points))
     buckets = 0
-    if cell_size is None:
+    keep = layout is not None and layout.use_cells and layout.cell_size > 0
+    if keep:
+        # The cells the search will use: as ``_cells.list_candidates`` places them.
+        grid_shape, buckets = layout.grid_shape, layout.buckets
+        cell_size = max(layout.cell_size, float(np.max(extent / np.asarray(grid_shape))))
+    elif cell_size is None:
         cell_size = cell_factor * (2 * float(measured.reach) + float(np.median(lengths)))
         if np.prod(np.ceil(extent * slack / cell_size) + 1) > most_cells:
             # Too many cells of this edge: they share that many lists through
@@ -245,15 +257,18 @@ def measure(
             # wider, so that a segment of the median extent spans at most two
             # per axis. Growing the cells instead until the grid fitted gave
             # the curled chip's outline at 10^5 nodes cells 24 times its
-            # radius and 54 segments per list.
+            # radius, up to 192 segments in a cell (RESULTS.md, "Bodies").
             cell_size *= slack
             buckets = size_class(most_cells)
         cell_size = _edge_class(cell_size)
-    grid_shape = tuple(size_class(int(v)) for v in np.ceil(extent * slack / cell_size) + 1)
-    if not buckets and np.prod(grid_shape) > most_cells:
-        buckets = size_class(most_cells)
+    if not keep:
+        grid_shape = tuple(size_class(int(v)) for v in np.ceil(extent * slack / cell_size) + 1)
+        if not buckets and np.prod(grid_shape) > most_cells:
+            buckets = size_class(most_cells)
     widths = (np.asarray(measured.boxes.high) - np.asarray(measured.boxes.low))[ok]
     span = tuple(size_class(int(math.ceil(w * slack / cell_size)) + 1) for w in widths.max(axis=0))
+    if keep:
+        span = tuple(map(max, span, layout.span))
     grid = Grid(jnp.asarray(low, x.dtype), jnp.asarray(cell_size, x.dtype))
     most_per_cell = int(
         _fullest_cell(measured.boxes, measured.segment_ok, grid, grid_shape, span, buckets)
@@ -265,7 +280,7 @@ def measure(
         for_paths=for_paths,
         use_cells=True,
         grid_shape=grid_shape,
-        cell_size=float(cell_size),
+        cell_size=float(layout.cell_size if keep else cell_size),
         span=span,
         cell_capacity=grow(most_per_cell, slack),
         chunk_rows=chunk_rows,
@@ -296,8 +311,9 @@ def measure_batch(x, surface: Surface, *, x_prev=None, mask=None, **kwargs) -> S
     """One ``Sizes`` for every scene of a batch: ``x`` f[B, N, 2]; ``surface``,
     ``x_prev`` and ``mask`` batched the same way (a surface may be shared).
 
-    Each scene is measured, then measured again at the largest cell edge, so
-    that the largest of each capacity holds for all.
+    Each scene is measured, then measured again at the cells of the largest
+    of those sizes (``measure(layout=...)``), so that the largest of each
+    capacity holds for all; with ``layout`` given, only the second pass.
     """
     x = np.asarray(x)
     shared = np.ndim(surface.nodes) == 2
@@ -311,8 +327,23 @@ def measure_batch(x, surface: Surface, *, x_prev=None, mask=None, **kwargs) -> S
             x[index], own, x_prev=scene(x_prev, index), mask=scene(mask, index), **kwargs, **extra
         )
 
-    alone = [sized(index) for index in range(x.shape[0])]
-    edge = max(sizes.cell_size for sizes in alone)
-    if edge > 0 and kwargs.get("cell_size") is None:
-        alone = [sized(index, cell_size=edge) for index in range(x.shape[0])]
-    return functools.reduce(largest, alone)
+    if kwargs.get("layout") is None:
+        kwargs["layout"] = functools.reduce(largest, [sized(i) for i in range(x.shape[0])])
+    # Each scene again at the merged cells: each alone may have chosen other
+    # cells (another edge, or lists shared through a hash), and a capacity
+    # holds only at the cells it was measured at.
+    fits = [sized(index) for index in range(x.shape[0])]
+    return functools.reduce(largest, [kwargs["layout"], *fits])
+
+
+def fitted(sizes: Sizes, x, surface: Surface, **kwargs) -> Sizes:
+    """``sizes`` with room for this configuration at their own cells: the
+    largest of ``sizes`` and ``measure(..., layout=sizes)`` (``measure_batch``
+    for ``x`` f[B, N, 2]). For sizes merged from others (``largest``: a
+    ``Search`` allocated ``at_least=`` an old state), whose cell capacity was
+    measured at other cells."""
+    if not sizes.use_cells:
+        return sizes
+    batched = np.ndim(x) == 3
+    fit = (measure_batch if batched else measure)(x, surface, layout=sizes, **kwargs)
+    return largest(sizes, fit)

@@ -21,9 +21,10 @@ def stable_order(keys: Array, num_values: int) -> Array:
     (many cells, or node indices as keys, with many entries), the keys are
     sorted a digit at a time from the lowest (a radix sort: each pass is the
     same one-operand sort of ``digit * E + place so far``, stable, so the
-    passes compose): two passes of 100,000 node indices measured 6.1 against
-    17.4 ms for ``argsort``, and of 900,000 cell entries 53 against 134 ms
-    (``benchmarks/sorts.py``).
+    passes compose): two passes over 100,000 node indices took 4.0 against
+    7.9 ms for ``argsort``, and over 900,000 cell entries 39.7 against 95.0 ms
+    (``python benchmarks/sorts.py``, both cores; RESULTS.md, "Sorts whose
+    keys outgrow int32").
     """
     size = keys.shape[0]
     if size <= 1:

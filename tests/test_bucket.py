@@ -347,6 +347,27 @@ def test_an_outline_in_a_wide_box_hashes_its_cells_and_finds_what_all_to_all_doe
     assert np.asarray(dense.active).sum() > 0
 
 
+def test_sizes_merged_from_other_cells_get_room_at_their_own():
+    """Sizes measured at wide cells on a sparse outline, merged with the full
+    outline's (``largest``: the widest cells, the larger capacity) hold less
+    than a wide cell of the full outline: that search overflows. A ``Search``
+    allocated ``at_least=`` them measures again at the merged cells."""
+    scene = curling_chip(3_000)
+    radius, (x, surface) = scene.radius, (scene.x, scene.surface)
+    num_segments = surface.segments.shape[0]
+    sparse = Surface(surface.nodes, surface.segments, jnp.arange(num_segments) % 4 == 0)
+    old = measure(x, sparse, radius=radius, cell_size=8 * radius)
+    merged = largest(measure(x, surface, radius=radius), old)
+    assert bool(sized_bucket_sort(x, surface, radius=radius, sizes=merged).overflow)
+    search = Search(radius=radius, method="binned")
+    state = search.allocate(x, surface, at_least=old)
+    assert state.sizes.cell_size == merged.cell_size
+    assert state.sizes.cell_capacity > merged.cell_capacity
+    contact, state = search.closest(state, x, surface)
+    assert not bool(state.overflow)
+    assert_same_contact(contact, all_to_all(x, surface, radius=radius), radius)
+
+
 @pytest.mark.parametrize("buckets", [-1, 2.5, True])
 def test_sizes_refuse_buckets_that_are_no_count(buckets):
     with pytest.raises(ValueError, match=r"Sizes.buckets must be an int >= 0"):
