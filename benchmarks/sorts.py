@@ -34,9 +34,9 @@ import numpy as np
 
 from jaxcontact import _inputs
 from jaxcontact._broad import segment_boxes
-from jaxcontact._cells import Grid, cell_of, flat_cell, num_lists
+from jaxcontact._cells import Grid, cell_entries, num_lists
 from jaxcontact._sizes import measure
-from jaxcontact._sort import sorted_pairs, stable_order
+from jaxcontact._sort import packs, sorted_pairs, stable_order
 from jaxcontact.bench import _run
 from jaxcontact.bench.timing import time_interleaved
 from jaxcontact.scenes import curling_chip, rough_die_scene
@@ -53,31 +53,18 @@ QUICK = {
 }
 
 
-def cell_entries(scene):
-    """``(cell i32[E], segment i32[E], lists)``: the binning's keys at ``measure``'s
-    sizes (the cell's list: its number, or its hash where ``sizes.buckets``)."""
+def binned_entries(scene):
+    """``(list i32[E], segment i32[E], lists)``: the binning's keys at ``measure``'s
+    sizes (``_cells.cell_entries``: the cell's list is its number, or its hash
+    where ``sizes.buckets``), the grid placed at the segments' boxes."""
     sizes = measure(scene.x, scene.surface, radius=scene.radius)
     segments = _inputs.resolve_segments(scene.surface)
     boxes = segment_boxes(segments, jnp.asarray(scene.radius, scene.x.dtype))
-    ok = np.asarray(segments.ok)
-    origin = np.min(np.asarray(boxes.low)[ok], axis=0)
-    grid = Grid(jnp.asarray(origin), jnp.asarray(sizes.cell_size, scene.x.dtype))
-    shape = sizes.grid_shape
-    low = np.asarray(cell_of(boxes.low, grid, shape))
-    high = np.asarray(cell_of(boxes.high, grid, shape))
-    num_cells = num_lists(shape, sizes.buckets)
-    cells, owners = [], []
-    for dx in range(sizes.span[0]):
-        for dy in range(sizes.span[1]):
-            at = low + np.asarray([dx, dy])
-            inside = ok & np.all(at <= high, axis=-1)
-            flat = np.asarray(flat_cell(jnp.asarray(at), shape, sizes.buckets))
-            cells.append(np.where(inside, flat, num_cells))
-            owners.append(np.arange(len(ok)))
-    # Entries run segment by segment, as ``bin_segments`` lays them out.
-    cell = np.stack(cells, axis=1).reshape(-1).astype(np.int32)
-    segment = np.stack(owners, axis=1).reshape(-1).astype(np.int32)
-    return cell, segment, num_cells + 1
+    origin = jnp.min(jnp.where(segments.ok[:, None], boxes.low, jnp.inf), axis=0)
+    grid = Grid(origin, jnp.asarray(sizes.cell_size, scene.x.dtype))
+    layout = (sizes.grid_shape, sizes.span, sizes.buckets)
+    cell, segment, _ = cell_entries(boxes, segments.ok, grid, *layout)
+    return np.asarray(cell), np.asarray(segment), num_lists(sizes.grid_shape, sizes.buckets) + 1
 
 
 def node_keys(scene):
@@ -88,16 +75,13 @@ def node_keys(scene):
 
 def rows(name: str, scene, repeats: int) -> list[str]:
     out = []
-    cell, segment, num_cells = cell_entries(scene)
+    cell, segment, num_cells = binned_entries(scene)
     num_segments = int(segment.max()) + 1
     forms = {
         "argsort (stable)": lambda c, s: s[jnp.argsort(c, stable=True)],
         "stable_order": lambda c, s: s[stable_order(c, num_cells)],
     }
-    if (
-        sorted_pairs(jnp.zeros(1, jnp.int32), jnp.zeros(1, jnp.int32), num_segments, num_cells)
-        is not None
-    ):
+    if packs(num_cells, num_segments):
         forms["packed pairs"] = lambda c, s: sorted_pairs(c, s, num_segments, num_cells)
     out += _time(
         f"{name}: cell entries",

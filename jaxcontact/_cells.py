@@ -82,6 +82,35 @@ def num_lists(shape: tuple[int, int], buckets: int = 0) -> int:
     return buckets or shape[0] * shape[1]
 
 
+def cell_entries(
+    boxes: Box, ok: Array, grid: Grid, shape: tuple[int, int], span: tuple[int, int], buckets=0
+) -> tuple[Array, Array, Array]:
+    """``(list i32[E], segment i32[E], too_wide bool[])``: an entry for each
+    ``ok`` segment in each cell its box touches, running segment by segment
+    (E = M * span_x * span_y); the entries past a box name the list
+    ``num_lists(shape, buckets)`` ("no cell"). ``too_wide``: a box covers more
+    than ``span`` cells on an axis. Arguments as ``bin_segments``'."""
+    num_cells = num_lists(shape, buckets)
+    num_segments = ok.shape[0]
+    safe = ok[:, None]
+    low = cell_of(jnp.where(safe, boxes.low, grid.origin), grid, shape)
+    high = cell_of(jnp.where(safe, boxes.high, grid.origin), grid, shape)
+    too_wide = jnp.any(ok & jnp.any(high - low >= jnp.asarray(span)[None], axis=-1))
+    step_x = jnp.arange(span[0], dtype=jnp.int32)[None, :, None]
+    step_y = jnp.arange(span[1], dtype=jnp.int32)[None, None, :]
+    cell_x = low[:, 0, None, None] + step_x
+    cell_y = low[:, 1, None, None] + step_y
+    inside = (
+        ok[:, None, None] & (cell_x <= high[:, 0, None, None]) & (cell_y <= high[:, 1, None, None])
+    )
+    listed = flat_cell(jnp.stack(jnp.broadcast_arrays(cell_x, cell_y), axis=-1), shape, buckets)
+    cell = jnp.where(inside, listed, num_cells).reshape(-1)
+    segment = jnp.broadcast_to(
+        jnp.arange(num_segments, dtype=jnp.int32)[:, None, None], inside.shape
+    ).reshape(-1)
+    return cell, segment, too_wide
+
+
 def bin_segments(
     boxes: Box,
     ok: Array,
@@ -103,24 +132,8 @@ def bin_segments(
       buckets: static; 0 gives each cell its own list, more hashes the
         cells into that many lists (``flat_cell``).
     """
-    num_cells = num_lists(shape, buckets)
-    num_segments = ok.shape[0]
-    safe = ok[:, None]
-    low = cell_of(jnp.where(safe, boxes.low, grid.origin), grid, shape)
-    high = cell_of(jnp.where(safe, boxes.high, grid.origin), grid, shape)
-    too_wide = jnp.any(ok & jnp.any(high - low >= jnp.asarray(span)[None], axis=-1))
-    step_x = jnp.arange(span[0], dtype=jnp.int32)[None, :, None]
-    step_y = jnp.arange(span[1], dtype=jnp.int32)[None, None, :]
-    cell_x = low[:, 0, None, None] + step_x
-    cell_y = low[:, 1, None, None] + step_y
-    inside = (
-        ok[:, None, None] & (cell_x <= high[:, 0, None, None]) & (cell_y <= high[:, 1, None, None])
-    )
-    listed = flat_cell(jnp.stack(jnp.broadcast_arrays(cell_x, cell_y), axis=-1), shape, buckets)
-    cell = jnp.where(inside, listed, num_cells).reshape(-1)
-    segment = jnp.broadcast_to(
-        jnp.arange(num_segments, dtype=jnp.int32)[:, None, None], inside.shape
-    ).reshape(-1)
+    num_cells, num_segments = num_lists(shape, buckets), ok.shape[0]
+    cell, segment, too_wide = cell_entries(boxes, ok, grid, shape, span, buckets)
     count = jax.ops.segment_sum(jnp.ones_like(cell), cell, num_segments=num_cells + 1)
     # Each cell's segments in increasing order: a segment is in a cell once
     # (in a list shared by hashed cells it may be twice: two equal entries,

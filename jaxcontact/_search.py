@@ -300,13 +300,13 @@ class Search:
             pooled = _inputs.with_pool(surface, pool)
             if self.radius is not None:
                 sizes = measure(x, pooled, radius=self._reach, mask=mask, **self._sizing)
-                sizes = self._fitted(sizes, at_least, "sizes", x, pooled, mask, {})
+                sizes = self._fitted(sizes, at_least, "sizes", x, pooled, mask, radius=self._reach)
                 sizes = self._room(sizes, x, pooled, mask, at_least, pairing)
                 candidates, overflow = self._find(x, surface, mask, sizes, pool)
             if x_prev is not None:
                 path_sizes = measure(x, pooled, x_prev=x_prev, mask=mask, **self._sizing)
                 path_sizes = self._fitted(
-                    path_sizes, at_least, "path_sizes", x, pooled, mask, {"x_prev": x_prev}
+                    path_sizes, at_least, "path_sizes", x, pooled, mask, x_prev=x_prev
                 )
                 path_sizes = self._path_room(path_sizes, x_prev, x, pooled, mask, at_least, pairing)
         state = self._state(sizes, path_sizes, candidates, overflow, (), x)
@@ -345,7 +345,7 @@ class Search:
             pooled = _inputs.with_pool(surface, pool)
             if self.radius is not None:
                 sizes = measure_batch(x, pooled, radius=self._reach, mask=mask, **self._sizing)
-                sizes = self._fitted(sizes, at_least, "sizes", x, pooled, mask, {})
+                sizes = self._fitted(sizes, at_least, "sizes", x, pooled, mask, radius=self._reach)
                 sizes = self._room(sizes, x, pooled, mask, at_least, pairing, axes)
 
                 def find(x, surface, mask, pool):
@@ -356,7 +356,7 @@ class Search:
             if x_prev is not None:
                 path_sizes = measure_batch(x, pooled, x_prev=x_prev, mask=mask, **self._sizing)
                 path_sizes = self._fitted(
-                    path_sizes, at_least, "path_sizes", x, pooled, mask, {"x_prev": x_prev}
+                    path_sizes, at_least, "path_sizes", x, pooled, mask, x_prev=x_prev
                 )
                 path_sizes = self._path_room(
                     path_sizes, x_prev, x, pooled, mask, at_least, pairing, axes
@@ -453,15 +453,14 @@ class Search:
             "chunk_rows": self.chunk_rows,
         }
 
-    def _fitted(self, sizes: Sizes, at_least, field: str, x, surface, mask, query) -> Sizes:
+    def _fitted(self, sizes: Sizes, at_least, field: str, x, surface, mask, **query) -> Sizes:
         """``sizes`` merged with ``at_least``'s, and where the merge changed
         them, with room at the merged cells for this configuration
-        (``_sizes.fitted``): a capacity holds only at the cells it was measured at."""
+        (``_sizes.fitted``; ``query``: ``radius=`` or ``x_prev=``, as
+        ``measure``): a capacity holds only at the cells it was measured at."""
         merged = self._merged(sizes, at_least, field)
         if merged == sizes:
             return merged
-        if "x_prev" not in query:
-            query = {"radius": self._reach}
         return fitted(merged, x, surface, mask=mask, **query, **self._sizing)
 
     @staticmethod

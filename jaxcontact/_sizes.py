@@ -147,6 +147,30 @@ def _measure(x_prev, x, surface, radius, mask, block_size: int, num_blocks: int)
     )
 
 
+def _cells_for(extent, edge: float, num_kept: int, slack: float, chosen: bool):
+    """``(edge, grid_shape, buckets)``: the cells of a region of ``extent``
+    (f[2]) at cell edge ``edge`` (``chosen``: from the data, so it may be
+    widened and is rounded to its class; else the caller's own)."""
+    # Keep the lists O(slaves kept): no more than 4 per kept slave.
+    most_cells = max(64, 4 * num_kept)
+    buckets = 0
+    if chosen:
+        if np.prod(np.ceil(extent * slack / edge) + 1) > most_cells:
+            # Too many cells of this edge: they share that many lists through
+            # a hash (``_cells.flat_cell``), and are made ``slack`` times
+            # wider, so that a segment of the median extent spans at most two
+            # per axis. Growing the cells instead until the grid fitted gave
+            # the curled chip's outline at 10^5 nodes cells 24 times its
+            # radius, up to 192 segments in a cell (RESULTS.md, "Bodies").
+            edge *= slack
+            buckets = size_class(most_cells)
+        edge = _edge_class(edge)
+    grid_shape = tuple(size_class(int(v)) for v in np.ceil(extent * slack / edge) + 1)
+    if not buckets and np.prod(grid_shape) > most_cells:
+        buckets = size_class(most_cells)
+    return edge, grid_shape, buckets
+
+
 @functools.partial(jax.jit, static_argnames=("shape", "span", "buckets"))
 def _fullest_cell(boxes: Box, ok: Array, grid: Grid, shape, span, buckets) -> Array:
     """i32[]: the most segments in one cell's list."""
@@ -241,35 +265,22 @@ def measure(
     high = np.minimum(np.asarray(measured.master.high), points.max(axis=0))
     extent = np.maximum(high - low, 0.0)
     lengths = np.asarray(measured.extents)[ok]
-    # Keep the lists O(slaves kept): no more than 4 per kept slave.
-    most_cells = max(64, 4 * len(points))
-    buckets = 0
-    keep = layout is not None and layout.use_cells and layout.cell_size > 0
-    if keep:
-        # The cells the search will use: as ``_cells.list_candidates`` places them.
-        grid_shape, buckets = layout.grid_shape, layout.buckets
-        cell_size = max(layout.cell_size, float(np.max(extent / np.asarray(grid_shape))))
-    elif cell_size is None:
-        cell_size = cell_factor * (2 * float(measured.reach) + float(np.median(lengths)))
-        if np.prod(np.ceil(extent * slack / cell_size) + 1) > most_cells:
-            # Too many cells of this edge: they share that many lists through
-            # a hash (``_cells.flat_cell``), and are made ``slack`` times
-            # wider, so that a segment of the median extent spans at most two
-            # per axis. Growing the cells instead until the grid fitted gave
-            # the curled chip's outline at 10^5 nodes cells 24 times its
-            # radius, up to 192 segments in a cell (RESULTS.md, "Bodies").
-            cell_size *= slack
-            buckets = size_class(most_cells)
-        cell_size = _edge_class(cell_size)
-    if not keep:
-        grid_shape = tuple(size_class(int(v)) for v in np.ceil(extent * slack / cell_size) + 1)
-        if not buckets and np.prod(grid_shape) > most_cells:
-            buckets = size_class(most_cells)
+    if layout is not None and layout.use_cells and layout.cell_size > 0:
+        edge, grid_shape, buckets = layout.cell_size, layout.grid_shape, layout.buckets
+    else:
+        chosen = cell_size is None
+        if chosen:
+            cell_size = cell_factor * (2 * float(measured.reach) + float(np.median(lengths)))
+        edge, grid_shape, buckets = _cells_for(extent, cell_size, len(points), slack, chosen)
+        layout = None
+    # The cells the search places (``_cells.list_candidates``): the edge, or
+    # wider where the region outgrows the grid (never, for cells chosen here).
+    cell = max(edge, float(np.max(extent / np.asarray(grid_shape))))
     widths = (np.asarray(measured.boxes.high) - np.asarray(measured.boxes.low))[ok]
-    span = tuple(size_class(int(math.ceil(w * slack / cell_size)) + 1) for w in widths.max(axis=0))
-    if keep:
+    span = tuple(size_class(int(math.ceil(w * slack / cell)) + 1) for w in widths.max(axis=0))
+    if layout is not None:
         span = tuple(map(max, span, layout.span))
-    grid = Grid(jnp.asarray(low, x.dtype), jnp.asarray(cell_size, x.dtype))
+    grid = Grid(jnp.asarray(low, x.dtype), jnp.asarray(cell, x.dtype))
     most_per_cell = int(
         _fullest_cell(measured.boxes, measured.segment_ok, grid, grid_shape, span, buckets)
     )
@@ -280,7 +291,7 @@ def measure(
         for_paths=for_paths,
         use_cells=True,
         grid_shape=grid_shape,
-        cell_size=float(layout.cell_size if keep else cell_size),
+        cell_size=float(edge),
         span=span,
         cell_capacity=grow(most_per_cell, slack),
         chunk_rows=chunk_rows,

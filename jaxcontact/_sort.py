@@ -47,6 +47,11 @@ def stable_order(keys: Array, num_values: int) -> Array:
     return order
 
 
+def packs(num_major: int, num_minor: int) -> bool:
+    """Whether ``sorted_pairs`` sorts pairs of these ranges (they fit in int32)."""
+    return 0 < num_minor and num_major * num_minor < 2**31
+
+
 def sorted_pairs(major: Array, minor: Array, num_minor: int, num_major: int) -> Array | None:
     """i32[E]: ``minor`` ordered by ``(major, minor)``, or None where
     ``major * num_minor + minor`` does not fit in int32.
@@ -56,7 +61,7 @@ def sorted_pairs(major: Array, minor: Array, num_minor: int, num_major: int) -> 
     position carried, so it fits where ``stable_order``'s ``key * E +
     position`` would not (E is several entries per segment).
     """
-    if num_major * num_minor >= 2**31 or num_minor == 0:
+    if not packs(num_major, num_minor):
         return None
     packed = major.astype(jnp.int32) * num_minor + minor.astype(jnp.int32)
     return jax.lax.sort(packed) % num_minor
