@@ -35,9 +35,9 @@ import math
 import jax
 import jax.numpy as jnp
 
-from jaxcontact import _inputs
-from jaxcontact._outline import vertex_neighbours
-from jaxcontact._rows import on_rows
+from jaxcontact._pipeline import segments as _segments
+from jaxcontact._pipeline.outline import vertex_neighbours
+from jaxcontact._pipeline.rows import on_rows
 from jaxcontact._types import Array, ContactList, Surface
 
 NORMALS = ("flat", "smooth")
@@ -75,7 +75,7 @@ def end_normals(surface: Surface, corner: float) -> tuple[Array, Array]:
     less than ``corner`` degrees, the segment's own normal elsewhere (an open
     end, a sharper corner, a node of more than two segments past the first).
     """
-    segments = _inputs.resolve_segments(surface)
+    segments = _segments.resolve_segments(surface)
     tangent = segments.end - segments.start
     own = _unit(jnp.stack([tangent[:, 1], -tangent[:, 0]], axis=-1))  # turned clockwise
     before, after = vertex_neighbours(segments)

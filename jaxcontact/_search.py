@@ -16,27 +16,40 @@ import dataclasses
 import functools
 import math
 import operator
+import warnings
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxcontact import _bucket, _dense, _inputs, _normals, _track
-from jaxcontact._pairs import Pairing
-from jaxcontact._placement import replicated, searched_whole
-from jaxcontact._sizes import (
+from jaxcontact import _normals, _track
+from jaxcontact._pipeline import candidates as _candidates
+from jaxcontact._pipeline import driver
+from jaxcontact._pipeline import inputs as _inputs
+from jaxcontact._pipeline import pairs as _pairs
+from jaxcontact._pipeline import segments as _segments
+from jaxcontact._pipeline import sizes as _sizes
+from jaxcontact._pipeline.pairs import Pairs
+from jaxcontact._pipeline.placement import replicated, searched_whole
+from jaxcontact._pipeline.sizes import fitted, measure, measure_batch
+from jaxcontact._query.closest import CLOSEST
+from jaxcontact._query.swept import SWEPT
+from jaxcontact._track import Slip
+from jaxcontact._types import (
     CELLS_ABOVE,
     CHUNK_ROWS,
+    Array,
+    Contact,
+    ContactList,
+    Crossing,
+    CrossingList,
     Sizes,
-    fitted,
-    largest,
-    measure,
-    measure_batch,
+    Surface,
 )
-from jaxcontact._track import Slip
-from jaxcontact._types import Array, Contact, ContactList, Crossing, CrossingList, Surface
 
-METHODS = ("auto", "binned", "dense", "exhaustive")
+METHODS = ("auto", "binned", "unbinned", "exhaustive")
+# Method names replaced, and their replacements.
+REPLACED_METHODS = {"dense": "unbinned"}
 # What ``closest`` returns: the slip too with ``track=True``.
 Closest = (
     tuple[Contact | ContactList, "SearchState"] | tuple[Contact | ContactList, "SearchState", Slip]
@@ -81,7 +94,7 @@ class SearchState:
 
     sizes: Sizes | None
     path_sizes: Sizes | None
-    candidates: _bucket.Candidates | None
+    candidates: _candidates.Candidates | None
     overflow: Array
     rebuilds: Array
     last_rebuild: Array
@@ -102,7 +115,7 @@ class SearchState:
     def rebuild_reasons(self) -> list[str]:
         """Why the candidates were last found again, in words (host side; [] if never)."""
         bits = int(np.bitwise_or.reduce(np.asarray(self.last_rebuild).reshape(-1), initial=0))
-        return [words for bit, words in _bucket.REBUILD_REASONS.items() if bits & bit]
+        return [words for bit, words in _candidates.REBUILD_REASONS.items() if bits & bit]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -151,9 +164,10 @@ class Search:
         depends on the scene: ``benchmarks/search_step.py`` (one step) and
         ``benchmarks/simulate.py`` (a ``lax.scan``) measure it.
       method: ``"binned"``: bucket sort with the segments binned in cells,
-        each kept slave against its cell's segments; ``"dense"``: bucket
-        sort with each kept slave against every segment; ``"auto"``:
-        binned above ``cells_above`` segments, dense at or below;
+        each kept slave against its cell's segments; ``"unbinned"``: bucket
+        sort with each kept slave against every segment (``"dense"``, its
+        old name, warns); ``"auto"``: binned above ``cells_above`` segments,
+        unbinned at or below;
         ``"exhaustive"``: every slave against every segment (``all_to_all``,
         ``swept``), with no sizes and no overflow.
       slack: every measured capacity is multiplied by this at ``allocate``;
@@ -172,9 +186,9 @@ class Search:
         ``CrossingList`` whose capacity ``allocate(..., x_prev=)`` measures
         (the paths crossing then times ``slack``). Not for the
         ``"exhaustive"`` method.
-      self_contact: slaves also pair with their own body's segments outside
-        their neighbourhood along the outline (``all_to_all``'s
-        ``self_contact``); the calls then need ``slave_node=``.
+      self_contact: replaced by ``Pairs(self_contact=True)`` passed to
+        each call (``pairs=``); ``True`` still works, with a
+        ``DeprecationWarning``, and applies to every call.
       track: carry each slave's contact from step to step in the state;
         ``closest`` then returns ``(contact, state, slip)`` with the
         ``Slip`` since the last step (docs/contract.md, "Slip history").
@@ -220,6 +234,14 @@ class Search:
                 raise ValueError(f"radius must be finite and >= 0, or None; got {self.radius}")
         if not (math.isfinite(self.skin) and self.skin >= 0):
             raise ValueError(f"skin must be finite and >= 0; got {self.skin}")
+        if self.method in REPLACED_METHODS:
+            new = REPLACED_METHODS[self.method]
+            warnings.warn(
+                f'Search(method="{self.method}") is replaced by method="{new}"',
+                DeprecationWarning,
+                stacklevel=3,
+            )
+            object.__setattr__(self, "method", new)
         if self.method not in METHODS:
             raise ValueError(f"method must be one of {METHODS}; got {self.method!r}")
         if not (math.isfinite(self.slack) and self.slack >= 1):
@@ -235,8 +257,15 @@ class Search:
                 raise ValueError(f"{name} must be a bool; got {getattr(self, name)!r}")
         if self.compact and self.method == "exhaustive":
             raise ValueError(
-                'compact=True needs a bucket method ("auto", "binned", "dense"); '
-                'the "exhaustive" method returns the dense Contact'
+                'compact=True needs a bucket method ("auto", "binned", "unbinned"); '
+                'the "exhaustive" method returns the N-row Contact'
+            )
+        if self.self_contact:
+            warnings.warn(
+                "Search(self_contact=True) is replaced by pairs=jaxcontact.Pairs("
+                "self_contact=True, ...) passed to allocate, closest and swept",
+                DeprecationWarning,
+                stacklevel=3,
             )
 
     # -- host ---------------------------------------------------------------
@@ -250,8 +279,8 @@ class Search:
         mask: Array | None = None,
         at_least: SearchState | Sizes | None = None,
         pool: Array | None = None,
-        slave_node: Array | None = None,
-        slave_body: Array | None = None,
+        pairs: Pairs | None = None,
+        **replaced,
     ) -> SearchState:
         """Measures the sizes from concrete data on the host and finds the candidates.
 
@@ -274,9 +303,11 @@ class Search:
             the candidates as if real, so switching them on neither
             overflows nor finds the candidates again; their nodes must be
             where they will be (finite, indices in range) already.
-          slave_node, slave_body: the pair rule, as for ``closest``: the
-            compact form's capacities count the contacts (and crossings)
-            the rule lets through.
+          pairs: the pair rule (``Pairs``), as for ``closest``: the compact
+            form's capacities count the contacts (and crossings) the rule
+            lets through. For a batch its arrays are batched as ``mask``.
+          **replaced: ``slave_node``, ``slave_body``: replaced by ``pairs``
+            (they warn).
 
         Returns:
           A ``SearchState``. Its sizes are static: each distinct sizes
@@ -285,19 +316,20 @@ class Search:
         if self.radius is None and x_prev is None:
             raise ValueError("allocate needs x_prev= for a Search without a radius (paths only)")
         hint = "allocate once outside, or start a state inside with search.init(sizes=...)"
-        given = (x, surface, x_prev, mask, pool, slave_node, slave_body)
-        _bucket.require_concrete("Search.allocate", given, hint)
+        pairs = self._replaced(pairs, replaced)
+        given = (x, surface, x_prev, mask, pool, pairs)
+        _inputs.require_concrete("Search.allocate", given, hint)
         batched = np.ndim(x) == 3
         if batched:
             return self._allocate_batch(*given, at_least)
         x_prev, x, mask = _inputs.check_slaves(x, x_prev, mask)
         surface = _inputs.check_surface(surface, x.dtype)
         pool = _inputs.check_mask("pool", pool, surface.segments.shape[0])
-        pairing = self._pairing(x, surface, mask, slave_node, slave_body)
+        pairing = self._pairing(x, surface, mask, pairs)
         sizes = path_sizes = candidates = None
         overflow = jnp.zeros((), bool)
         if self.method != "exhaustive":
-            pooled = _inputs.with_pool(surface, pool)
+            pooled = _segments.with_pool(surface, pool)
             if self.radius is not None:
                 sizes = measure(x, pooled, radius=self._reach, mask=mask, **self._sizing)
                 sizes = self._fitted(sizes, at_least, "sizes", x, pooled, mask, radius=self._reach)
@@ -312,15 +344,34 @@ class Search:
         state = self._state(sizes, path_sizes, candidates, overflow, (), x)
         return _kept_history(state, at_least)
 
-    def _pairing(self, x, surface, mask, slave_node, slave_body):
-        """The checked pair keywords of one (unbatched) call."""
-        return _inputs.check_pairing(slave_node, slave_body, self.self_contact, x, surface, mask)
+    def _replaced(self, pairs, replaced: dict) -> Pairs:
+        """``pairs`` with the replaced keywords folded in (they warn), unchecked."""
+        unknown = set(replaced) - {"slave_node", "slave_body"}
+        if unknown:
+            raise TypeError(f"unexpected keyword arguments {sorted(unknown)}")
+        pairs = Pairs() if pairs is None else pairs
+        if not isinstance(pairs, Pairs):
+            raise ValueError(f"pairs must be a jaxcontact.Pairs; got {type(pairs).__name__}")
+        given = {name: value for name, value in replaced.items() if value is not None}
+        if given:
+            words = ", ".join(f"{name}=" for name in given)
+            warnings.warn(
+                f"the keywords {words} are replaced by pairs=jaxcontact.Pairs({words}...)",
+                DeprecationWarning,
+                stacklevel=3,
+            )
+            pairs = dataclasses.replace(pairs, **given)
+        if self.self_contact and not pairs.self_contact:
+            pairs = dataclasses.replace(pairs, self_contact=True)
+        return pairs
 
-    def _allocate_batch(
-        self, x, surface, x_prev, mask, pool, slave_node, slave_body, at_least
-    ) -> SearchState:
+    def _pairing(self, x, surface, mask, pairs: Pairs) -> Pairs:
+        """The checked pair rule of one (unbatched) call."""
+        return _pairs.check(pairs, x, surface, mask)
+
+    def _allocate_batch(self, x, surface, x_prev, mask, pool, pairs, at_least) -> SearchState:
         # A batch split over explicit mesh axes cannot be mapped over: whole.
-        given = (jnp.asarray(x), surface, x_prev, mask, pool, slave_node, slave_body)
+        given = (jnp.asarray(x), surface, x_prev, mask, pool, pairs.slave_node, pairs.slave_body)
         x, surface, x_prev, mask, pool, slave_node, slave_body = replicated(given)
         if x.shape[-1] != 2:
             raise ValueError(f"x must have shape (N, 2) or (B, N, 2); got shape {x.shape}")
@@ -335,14 +386,14 @@ class Search:
         )
         surface = _batched_surface(surface, batch)
         pool = _batched("pool", pool, 1, batch)
-        pairing = Pairing(slave_node, slave_body, self.self_contact)
+        pairing = Pairs(slave_node, slave_body, pairs.self_contact)
         first = jax.tree.map(lambda values: values[0], (x, surface, mask, pairing))
-        self._pairing(first[0], first[1], first[2], first[3].slave_node, first[3].slave_body)
+        self._pairing(*first)
         axes = (0, 0, None if mask is None else 0, jax.tree.map(lambda _: 0, pairing))
         sizes = path_sizes = candidates = None
         overflow = jnp.zeros(x.shape[:1], bool)
         if self.method != "exhaustive":
-            pooled = _inputs.with_pool(surface, pool)
+            pooled = _segments.with_pool(surface, pool)
             if self.radius is not None:
                 sizes = measure_batch(x, pooled, radius=self._reach, mask=mask, **self._sizing)
                 sizes = self._fitted(sizes, at_least, "sizes", x, pooled, mask, radius=self._reach)
@@ -389,7 +440,7 @@ class Search:
                 "init with sizes= needs a Search with a radius; this one searches paths"
             )
         if sizes is not None:
-            _bucket.check_sizes(sizes, x.shape[0], for_paths=False)
+            _sizes.check_sizes(sizes, x.shape[0], for_paths=False)
             candidates, overflow = self._find(x, surface, mask, sizes, pool)
         return self._state(sizes, path_sizes, candidates, overflow, (), x)
 
@@ -414,7 +465,7 @@ class Search:
         if self.skin == 0 or empty:
             return None, jnp.zeros((), bool)
         reach = jnp.asarray(self._reach, x.dtype)
-        candidates = _bucket.find_jit(x, surface, reach, mask, sizes=sizes, pool=pool)
+        candidates = _candidates.find_jit(x, surface, reach, mask, sizes=sizes, pool=pool)
         return candidates, candidates.overflow
 
     def _room(self, sizes: Sizes, x, surface, mask, at_least, pairing, axes=None) -> Sizes:
@@ -423,8 +474,10 @@ class Search:
         (the dense form) for a search that is not compact."""
         if not self.compact:
             return dataclasses.replace(sizes, contact_capacity=0)
-        measured = _bucket.measure_contacts(
-            x, surface, self.radius, mask, sizes, self.slack, axes=axes, pairing=pairing
+        radius = jnp.asarray(self.radius, x.dtype)
+        axes = None if axes is None else ((axes[0],), *axes[1:])
+        measured = _sizes.with_entries(
+            CLOSEST, (x,), surface, radius, mask, sizes, self.slack, pairing, axes
         )
         return self._merged(measured, at_least, "sizes")
 
@@ -433,8 +486,9 @@ class Search:
         sizes = dataclasses.replace(sizes, contact_capacity=0)
         if not self.compact:
             return sizes
-        measured = _bucket.measure_crossings(
-            x_prev, x, surface, mask, sizes, self.slack, pairing, axes=axes
+        axes = None if axes is None else ((axes[0], axes[0]), *axes[1:])
+        measured = _sizes.with_entries(
+            SWEPT, (x_prev, x), surface, None, mask, sizes, self.slack, pairing, axes
         )
         return self._merged(measured, at_least, "path_sizes")
 
@@ -444,7 +498,7 @@ class Search:
 
     @property
     def _sizing(self) -> dict:
-        use_cells = {"auto": None, "binned": True, "dense": False}[self.method]
+        use_cells = {"auto": None, "binned": True, "unbinned": False}[self.method]
         return {
             "slack": self.slack,
             "block_size": self.block_size,
@@ -473,11 +527,7 @@ class Search:
             raise ValueError(
                 f"at_least must be a SearchState or Sizes; got {type(at_least).__name__}"
             )
-        if old is not None and old.num_slaves != sizes.num_slaves:
-            raise ValueError(
-                f"at_least was allocated for {old.num_slaves} slaves; x has {sizes.num_slaves}"
-            )
-        return sizes if old is None else largest(sizes, old)
+        return _sizes.merged(sizes, old)
 
     # -- traced -------------------------------------------------------------
 
@@ -489,8 +539,8 @@ class Search:
         *,
         mask: Array | None = None,
         radius=None,
-        slave_node: Array | None = None,
-        slave_body: Array | None = None,
+        pairs: Pairs | None = None,
+        **replaced,
     ) -> Closest:
         """The closest master segment of every slave within ``radius``: one step.
 
@@ -509,7 +559,9 @@ class Search:
           radius: optional traced scalar or f[N] at or under ``search.radius``
             (the default): a slave whose radius exceeds it sets ``overflow``
             (the bucket methods).
-          slave_node, slave_body: the pair rule (``all_to_all``'s).
+          pairs: the pair rule (``Pairs``, ``all_to_all``'s).
+          **replaced: ``slave_node``, ``slave_body``: replaced by ``pairs``
+            (they warn).
 
         Returns:
           ``(contact, state)``. ``contact`` equals ``all_to_all(x, surface,
@@ -522,9 +574,10 @@ class Search:
         """
         if self.radius is None:
             raise ValueError("closest needs a Search with a radius; this one searches paths only")
+        _check_state_type(state)
         radius = self.radius if radius is None else radius
         x, surface, radius, mask = _inputs.check_contact_inputs(x, surface, radius, mask)
-        pairing = self._pairing(x, surface, mask, slave_node, slave_body)
+        pairing = self._pairing(x, surface, mask, self._replaced(pairs, replaced))
         if self.track and state.history is None:
             raise ValueError("state has no slip history: allocate it with this search (track=True)")
         if self.track and state.history.found.shape != x.shape[:1]:
@@ -533,22 +586,22 @@ class Search:
                 f"x has {x.shape[0]} rows: allocate with this x"
             )
         if self.method == "exhaustive":
-            contact = _dense._all_to_all(x, surface, radius, mask, pairing)
+            contact = driver.exhaustive(CLOSEST, (x,), surface, radius, mask, pairing)
             return self._finish(contact, state, x, surface)
         if state.sizes is None:
             raise ValueError(
                 "state has no closest-point sizes: make it with this search's allocate"
             )
-        _bucket.check_sizes(state.sizes, x.shape[0], for_paths=False)
+        _sizes.check_sizes(state.sizes, x.shape[0], for_paths=False)
         self._check_form(state.sizes)
         self._check_state(state, x, surface)
         contact, state = _closest(self, state, x, surface, mask, radius, pairing)
         return self._finish(contact, state, x, surface)
 
     def _check_form(self, sizes: Sizes):
-        """A ``ValueError`` when ``sizes`` were made for the other form (compact or dense)."""
+        """A ``ValueError`` when ``sizes`` were made for the other form (compact or N rows)."""
         if bool(sizes.contact_capacity) != self.compact:
-            made, wanted = (("compact", "dense"), ("dense", "compact"))[self.compact]
+            made, wanted = (("compact", "N-row"), ("N-row", "compact"))[self.compact]
             raise ValueError(
                 f"state was allocated by a {made} search; this one is {wanted}: "
                 "allocate with this search"
@@ -596,8 +649,8 @@ class Search:
         surface: Surface,
         *,
         mask: Array | None = None,
-        slave_node: Array | None = None,
-        slave_body: Array | None = None,
+        pairs: Pairs | None = None,
+        **replaced,
     ) -> tuple[Crossing | CrossingList, SearchState]:
         """The first crossing of every slave's path ``x_prev -> x`` with the master.
 
@@ -608,21 +661,18 @@ class Search:
           entries are the crossed rows of that ``Crossing``
           (``crossing.to_crossing(N)`` spreads them back).
         """
-        pair_keywords = {
-            "slave_node": slave_node,
-            "slave_body": slave_body,
-            "self_contact": self.self_contact,
-        }
+        _check_state_type(state)
+        points, surface, _, mask = SWEPT.check((x_prev, x), surface, None, mask)
+        pairing = self._pairing(x, surface, mask, self._replaced(pairs, replaced))
         if self.method == "exhaustive":
-            return _dense.swept(x_prev, x, surface, mask=mask, **pair_keywords), state
+            return driver.exhaustive(SWEPT, points, surface, None, mask, pairing), state
         if state.path_sizes is None:
             raise ValueError("state has no path sizes: allocate it with x_prev=")
         _check_unbatched(state, "swept")
         sizes = state.path_sizes
+        _sizes.check_sizes(sizes, x.shape[0], for_paths=True)
         self._check_form(sizes)
-        crossing = _bucket.sized_bucket_swept(
-            x_prev, x, surface, mask=mask, sizes=sizes, **pair_keywords
-        )
+        crossing = driver.sized_jit(SWEPT, points, surface, None, mask, sizes=sizes, pairs=pairing)
         return crossing, dataclasses.replace(state, overflow=state.overflow | crossing.overflow)
 
 
@@ -667,6 +717,15 @@ def _kept_history(state: SearchState, at_least) -> SearchState:
     return dataclasses.replace(state, history=old)
 
 
+def _check_state_type(state):
+    """A ``ValueError`` unless ``state`` is a ``SearchState``."""
+    if not isinstance(state, SearchState):
+        raise ValueError(
+            "state must be the SearchState that search.allocate(x, surface) returned (or the "
+            f"last step's); got {type(state).__name__}"
+        )
+
+
 def _check_unbatched(state: SearchState, method: str):
     """A state allocated for a batch is searched under ``vmap``, scene by scene."""
     if np.ndim(state.overflow) != 0:
@@ -682,27 +741,25 @@ def _closest(search: Search, state: SearchState, x, surface, mask, radius, pairi
     sizes = state.sizes
     reach = jnp.asarray(search._reach, x.dtype)
     # A radius past the bound the sizes were built for may miss a contact.
-    beyond = jnp.any(_inputs.rows_ok(x, mask) & (radius > search.radius))
+    beyond = jnp.any(_segments.rows_ok(x, mask) & (radius > search.radius))
 
     def flagged(contact):
         return contact._replace(overflow=contact.overflow | beyond)
 
     if state.candidates is None:  # no skin: the whole bucket sort, every step
-        contact = flagged(
-            _bucket.contact_jit(x, surface, radius, mask, sizes=sizes, pairing=pairing)
-        )
+        contact = flagged(driver.sized(CLOSEST, (x,), surface, radius, mask, sizes, pairs=pairing))
         return contact, dataclasses.replace(state, overflow=state.overflow | contact.overflow)
-    stale = _bucket.expired(state.candidates, x, surface, mask, search.skin)
+    stale = _candidates.expired(state.candidates, x, surface, mask, search.skin)
 
     def find_again(x, surface, mask, candidates):
-        return _bucket.find(x, surface, reach, mask, sizes, candidates.pool)
+        return _candidates.find(x, surface, reach, mask, sizes, candidates.pool)
 
     def keep(x, surface, mask, candidates):
         return candidates
 
     candidates = jax.lax.cond(stale != 0, find_again, keep, x, surface, mask, state.candidates)
-    contact = _bucket.contact_jit(
-        x, surface, radius, mask, sizes=sizes, candidates=candidates, pairing=pairing
+    contact = driver.sized(
+        CLOSEST, (x,), surface, radius, mask, sizes, candidates=candidates, pairs=pairing
     )
     contact = flagged(contact)
     state = dataclasses.replace(

@@ -27,10 +27,13 @@ import numpy as np
 from jax.sharding import Mesh, NamedSharding
 from jax.sharding import PartitionSpec as P
 
-from jaxcontact import _bucket, _inputs
-from jaxcontact._bucket import bucket_sort, bucket_swept
-from jaxcontact._sizes import Sizes, measure_batch
-from jaxcontact._types import Array, Surface
+from jaxcontact._detect import bucket_sort, bucket_swept
+from jaxcontact._pipeline import driver
+from jaxcontact._pipeline import inputs as _inputs
+from jaxcontact._pipeline.sizes import measure_batch
+from jaxcontact._query.closest import CLOSEST
+from jaxcontact._query.swept import SWEPT
+from jaxcontact._types import Array, Sizes, Surface
 
 
 def shard_rows(num_rows: int, num_shards: int) -> int:
@@ -98,12 +101,13 @@ def sharded(detector, mesh: Mesh, *, axis: str | None = None):
     def run(*args, mask: Array | None = None, **kwargs):
         if kwargs.get("compact"):
             raise ValueError(
-                "sharded(...) returns the dense Contact or Crossing: compact=True is not supported "
+                "sharded(...) returns the N-row Contact or Crossing: compact=True is not supported "
                 "(search the sharded arrays with Search(compact=True) instead)"
             )
         per_row = [k for k in ("slave_node", "slave_body") if kwargs.get(k) is not None]
         per_row += ["radius"] if np.ndim(kwargs.get("radius", 0)) else []
         per_row += ["self_contact"] if kwargs.get("self_contact") else []
+        per_row += ["pairs"] if kwargs.get("pairs") is not None else []
         if per_row:
             raise ValueError(
                 f"sharded(...) splits the slave arrays only: {', '.join(per_row)} "
@@ -185,13 +189,13 @@ class _Sized:
         surface = points[-1]
         if self.sizes.for_paths:
             x_prev, x = points[:2]
-            return _bucket.crossing_jit(x_prev, x, surface, mask, sizes=self.sizes)
-        return _bucket.contact_jit(points[0], surface, radius, mask, sizes=self.sizes)
+            return driver.sized_jit(SWEPT, (x_prev, x), surface, None, mask, sizes=self.sizes)
+        return driver.sized_jit(CLOSEST, (points[0],), surface, radius, mask, sizes=self.sizes)
 
 
 def _sized(detector, points, surface, rows, num_shards: int, arrays) -> _Sized:
     """``detector`` on one device's rows with sizes measured for them on the host."""
-    _bucket.require_concrete(f"sharded({detector.__name__})", (points, surface, rows, arrays))
+    _inputs.require_concrete(f"sharded({detector.__name__})", (points, surface, rows, arrays))
     if detector is bucket_swept:
         _, x, _ = _inputs.check_path_inputs(points[0], points[1], None)
         surface = _inputs.check_surface(surface, x.dtype)

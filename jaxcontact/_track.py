@@ -27,9 +27,10 @@ from typing import NamedTuple
 import jax
 import jax.numpy as jnp
 
-from jaxcontact import _inputs
-from jaxcontact._outline import chains, vertex_neighbours
-from jaxcontact._rows import on_rows
+from jaxcontact._pipeline import inputs as _inputs
+from jaxcontact._pipeline import segments as _segments
+from jaxcontact._pipeline.outline import chains, vertex_neighbours
+from jaxcontact._pipeline.rows import on_rows
 from jaxcontact._types import Array, Contact, ContactList, Surface
 
 # Segments walked each way from last step's segment before the arc
@@ -196,7 +197,7 @@ def _track(last: History, contact, surface: Surface) -> Slip:
 
 def _links(surface: Surface):
     """The segments resolved, and each one's neighbours ``(before, after)``."""
-    segments = _inputs.resolve_segments(surface)
+    segments = _segments.resolve_segments(surface)
     return segments, vertex_neighbours(segments)
 
 
@@ -212,7 +213,7 @@ def _slip_at(last: History, rows: Array, now: _Now, surface: Surface, links) -> 
 
     last_found, last_active = read(last.found, False), read(last.active, False)
     both = now.found & last_found
-    ends = _inputs.ends_of(nodes, indices)  # f[M, 2, 2], the current nodes
+    ends = _segments.ends_of(nodes, indices)  # f[M, 2, 2], the current nodes
     squared = jnp.sum((ends[:, 1] - ends[:, 0]) ** 2, axis=-1)
     # 0 with a zero gradient for a zero-length segment (padding reading one node twice).
     length = jnp.where(squared > 0, jnp.sqrt(jnp.where(squared > 0, squared, 1)), 0)

@@ -8,6 +8,7 @@ and ``M`` for master segments; ``f`` is the input's float dtype.
 
 from __future__ import annotations
 
+import dataclasses
 from typing import NamedTuple
 
 import jax
@@ -150,3 +151,62 @@ class CrossingList(NamedTuple):
         """The dense ``Crossing`` of ``num_rows`` slaves (N, static) these entries describe."""
 
         return _spread_rows(self, Crossing, num_rows)
+
+
+# With this many segments or fewer, each kept slave meets every segment: a
+# running minimum over M broadcast segments beats per-slave candidate gathers
+# (benchmarks/bucket.py measures the crossover). ``Search(cells_above=...)``.
+CELLS_ABOVE = 48
+# Kept slaves are searched in chunks of this many rows, fullest lists first.
+CHUNK_ROWS = 2048
+
+
+@dataclasses.dataclass(frozen=True)
+class Sizes:
+    """Static sizes of a bucket sort: hashable, a static field of ``SearchState``.
+
+    A change of any field compiles the detectors anew.
+
+    Attributes:
+      num_slaves: N, the slave count the sizes were measured for.
+      block_size: slaves culled together (consecutive rows).
+      block_capacity: most blocks kept near the master.
+      for_paths: made for ``bucket_swept`` (path boxes) rather than ``bucket_sort``.
+      use_cells: bin the segments in cells; False tests each kept slave
+        against every segment.
+      grid_shape: cells in x and in y.
+      cell_size: smallest cell edge; cells grow when the region outgrows the grid.
+      span: most cells a segment's inflated box may cover, in x and in y.
+      cell_capacity: most segments one cell's list may hold.
+      chunk_rows: kept slaves searched together, longest cell lists first.
+      buckets: 0 gives each of the ``grid_shape`` cells its own list; more
+        hashes the cells into that many lists (a grid of that many more
+        cells than slaves would otherwise need wider cells).
+      contact_capacity: entries of the compact result (``ContactList``,
+        ``Search(compact=True)``); 0 (the default) returns the dense
+        ``Contact`` of N rows.
+    """
+
+    num_slaves: int
+    block_size: int
+    block_capacity: int
+    for_paths: bool = False
+    use_cells: bool = False
+    grid_shape: tuple[int, int] = (1, 1)
+    cell_size: float = 0.0
+    span: tuple[int, int] = (1, 1)
+    cell_capacity: int = 1
+    chunk_rows: int = CHUNK_ROWS
+    contact_capacity: int = 0
+    buckets: int = 0
+
+    def __post_init__(self):
+        if isinstance(self.buckets, bool) or not isinstance(self.buckets, int) or self.buckets < 0:
+            raise ValueError(
+                f"Sizes.buckets must be an int >= 0 (0: a list per cell); got {self.buckets!r}"
+            )
+
+    @property
+    def slave_capacity(self) -> int:
+        """Slaves the narrow phase holds: ``block_capacity * block_size``."""
+        return self.block_capacity * self.block_size

@@ -16,7 +16,7 @@ import warnings
 import jax
 import numpy as np
 
-from jaxcontact import _inputs
+from jaxcontact._pipeline import inputs as _inputs
 from jaxcontact._types import Surface
 
 # How many bad row indices a message lists before it only counts them.

@@ -57,6 +57,7 @@ penalty lets slaves penetrate by ``f_n / stiffness``.
 from __future__ import annotations
 
 import functools
+import warnings
 from typing import NamedTuple
 
 import jax
@@ -100,6 +101,10 @@ def contact_forces(
 ) -> tuple[Array, Array]:
     """Penalty forces of a ``Contact`` against a rigid master: on each slave, and their total.
 
+    Replaced by ``penalty`` (it warns): ``penalty(contact, surface,
+    stiffness).on_slaves`` is the first value, minus its sum the second, and
+    ``on_master`` places that reaction on the master's nodes.
+
     The force on an active slave is ``stiffness * (-gap) * normal`` (it pushes
     the slave out along the master's outward normal); inactive rows get zero.
     The master takes the opposite of their sum. Inside ``jax.shard_map`` with
@@ -110,6 +115,11 @@ def contact_forces(
     Returns:
       ``(on_slaves f[N, 2], on_master f[2])``.
     """
+    warnings.warn(
+        "contact_forces is replaced by jaxcontact.forces.penalty(contact, surface, stiffness)",
+        DeprecationWarning,
+        stacklevel=2,
+    )
     depth = jnp.where(contact.active, -contact.gap, 0)
     on_slaves = (stiffness * depth)[:, None] * contact.normal
     on_master = -jnp.sum(on_slaves, axis=0)

@@ -24,7 +24,9 @@ import jax.numpy as jnp
 import numpy as np
 
 import jaxcontact
-from jaxcontact import _bucket
+from jaxcontact._detect import at_sizes
+from jaxcontact._query.closest import CLOSEST
+from jaxcontact._query.swept import SWEPT
 from tests.oracle import OracleContact, OracleCrossing, oracle_contact, oracle_crossing
 
 # Ulps of the local scale allowed for values built from a handful of
@@ -385,9 +387,14 @@ def assert_same_crossing(binned, dense, degenerate=False):
 # directly, with the input checks the public detectors make.
 
 
-# The sized forms, inputs checked: shared with Search and the benchmarks.
-sized_bucket_sort = _bucket.sized_bucket_sort
-sized_bucket_swept = _bucket.sized_bucket_swept
+def sized_bucket_sort(x, surface, *, radius, mask=None, sizes, candidates=None, pairs=None):
+    """``bucket_sort`` at ``sizes``, inputs checked (``_detect.at_sizes``)."""
+    return at_sizes(CLOSEST, (x,), surface, radius, mask, sizes, candidates, pairs)
+
+
+def sized_bucket_swept(x_prev, x, surface, *, mask=None, sizes, pairs=None):
+    """``bucket_swept`` at ``sizes``, inputs checked (``_detect.at_sizes``)."""
+    return at_sizes(SWEPT, (x_prev, x), surface, None, mask, sizes, pairs=pairs)
 
 
 ROOT = Path(__file__).resolve().parent.parent

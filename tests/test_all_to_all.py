@@ -7,8 +7,8 @@ import pytest
 
 import jaxcontact
 from jaxcontact import Surface
-from jaxcontact._geometry import edge, squared_distance
-from jaxcontact._lowest import lowest_score
+from jaxcontact._pipeline.geometry import edge, squared_distance
+from jaxcontact._pipeline.lowest import lowest_score
 from jaxcontact.scenes import paper_scene
 from tests import helpers
 from tests.oracle import oracle_contact

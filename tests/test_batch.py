@@ -12,7 +12,7 @@ from jaxcontact import (
     contact_forces,
     swept,
 )
-from jaxcontact._sizes import measure
+from jaxcontact._pipeline.sizes import measure
 from jaxcontact.scenes import cutting_scene, rough_die_scene
 from tests.helpers import FLOAT, assert_same_contact, assert_same_crossing
 
@@ -209,12 +209,12 @@ def test_nested_vmap_equals_a_double_loop():
 def test_searches_batch_as_usual_off_the_cpu(monkeypatch):
     # On an accelerator the searches are vmapped like everything else; the
     # answer is the same. (The backend is faked: CI has only a CPU.)
-    import jaxcontact._lowest
+    import jaxcontact._pipeline.lowest
 
     scenes, x_prev, x, surface, mask = _batch()
     expected = jax.vmap(lambda x, s, m: all_to_all(x, s, radius=RADIUS, mask=m))(x, surface, mask)
     paths = jax.vmap(lambda p, x, s: swept(p, x, s))(x_prev, x, surface)
-    monkeypatch.setattr(jaxcontact._lowest.jax, "default_backend", lambda: "gpu")
+    monkeypatch.setattr(jaxcontact._pipeline.lowest.jax, "default_backend", lambda: "gpu")
     got = jax.vmap(lambda x, s, m: all_to_all(x, s, radius=RADIUS, mask=m))(x, surface, mask)
     np.testing.assert_array_equal(got.segment, expected.segment)
     np.testing.assert_array_equal(got.gap, expected.gap)

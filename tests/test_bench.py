@@ -297,7 +297,7 @@ def test_size_scaling_rows_slopes_and_figure(tmp_path, monkeypatch):
 
 
 def test_sizes_too_small_are_counted_as_missed_contacts():
-    from jaxcontact._sizes import measure
+    from jaxcontact._pipeline.sizes import measure
     from jaxcontact.bench import time_vs_error
 
     scene = cutting_scene(2_000, 18.0)

@@ -16,8 +16,8 @@ import pytest
 
 import jaxcontact
 from jaxcontact import Search, Surface, all_to_all, bucket_sort, bucket_swept, swept
-from jaxcontact._inputs import resolve_segments
-from jaxcontact._outline import chains
+from jaxcontact._pipeline.inputs import resolve_segments
+from jaxcontact._pipeline.outline import chains
 from tests.helpers import FLOAT, local_atol
 from tests.oracle import closest_point, oracle_chains, oracle_contact, oracle_crossing
 

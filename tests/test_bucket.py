@@ -28,7 +28,7 @@ from jaxcontact import (
     bucket_swept,
     swept,
 )
-from jaxcontact._sizes import CHUNK_ROWS, largest, measure
+from jaxcontact._pipeline.sizes import CHUNK_ROWS, largest, measure
 from jaxcontact.scenes import curling_chip, cutting_scene, paper_scene, rough_die_scene
 from tests.helpers import (
     FLOAT,

@@ -7,9 +7,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from jaxcontact import _cells, _sort
-from jaxcontact._broad import Box
-from jaxcontact._cells import Grid, bin_segments
-from jaxcontact._sort import stable_order
+from jaxcontact._pipeline.broad import Box
+from jaxcontact._pipeline.cells import Grid, bin_segments
+from jaxcontact._pipeline.sort import stable_order
 
 
 @settings(max_examples=40, deadline=None)

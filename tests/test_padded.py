@@ -11,7 +11,7 @@ import pytest
 from jaxcontact import Surface, all_to_all, bucket_sort, bucket_swept, swept
 from jaxcontact._bucket import contact_jit, crossing_jit
 from jaxcontact._dense import _all_to_all, _swept
-from jaxcontact._padded import size_class
+from jaxcontact._pipeline.padding import size_class
 
 NODES = np.array([[3.0, 0.0], [2.0, 0.1], [1.0, 0.0], [0.0, 0.05]])
 SEGMENTS = np.array([[0, 1], [1, 2], [2, 3]])
@@ -118,7 +118,7 @@ def test_plain_bucket_calls_keep_their_sizes_and_measure_again_only_past_them(qu
 
 
 def test_checked_host_inputs_stay_numpy_in_the_dtype_jax_computes_in():
-    from jaxcontact._inputs import as_array
+    from jaxcontact._pipeline.inputs import as_array
 
     values = as_array(np.zeros((3, 2)))
     assert isinstance(values, np.ndarray)

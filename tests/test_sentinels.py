@@ -32,7 +32,7 @@ from jaxcontact import (
     validate,
 )
 from jaxcontact._bucket import Candidates
-from jaxcontact._sizes import measure
+from jaxcontact._pipeline.sizes import measure
 from tests.helpers import FLOAT, local_atol
 
 RADIUS = 0.25

@@ -15,10 +15,10 @@ import numpy as np
 import pytest
 
 from jaxcontact import _outline
-from jaxcontact._geometry import edge, squared_distance
-from jaxcontact._inputs import resolve_segments
-from jaxcontact._lowest import lowest_score
-from jaxcontact._narrow import _lowest_in_plane
+from jaxcontact._pipeline.geometry import edge, squared_distance
+from jaxcontact._pipeline.inputs import resolve_segments
+from jaxcontact._pipeline.lowest import lowest_score
+from jaxcontact._pipeline.narrow import _lowest_in_plane
 from jaxcontact._types import Surface
 from tests import helpers
 

@@ -236,7 +236,7 @@ def test_many_rows_are_worked_on_compacted_or_all_alike(found_rows):
     """Above 1,024 rows, tracking and smoothing gather the found rows into a
     capacity of N / 16 (at least 1,024), or work on all rows when more are
     found: both give each row what the 8-row scene gives it."""
-    from jaxcontact._rows import capacity
+    from jaxcontact._pipeline.rows import capacity
 
     xs, surfaces, slips, _ = scene(jnp.float32)
     one = lambda t: Surface(surfaces.nodes[t], surfaces.segments, surfaces.mask)  # noqa: E731

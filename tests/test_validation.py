@@ -10,7 +10,7 @@ import pytest
 
 import jaxcontact
 from jaxcontact import Search, Surface
-from jaxcontact._sizes import measure
+from jaxcontact._pipeline.sizes import measure
 from tests.helpers import X64
 
 # All of this file runs again with x64 off (tests/test_x64_off.py).

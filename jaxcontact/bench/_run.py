@@ -184,7 +184,7 @@ def sized_contact(radius, sizes):
     """``bucket_sort`` with fixed ``sizes``, jitted: ``fn(x, surface) -> Contact``.
 
     The benchmarks' "bucket_sort (sized)": the sizes are measured once outside
-    the timer (``jaxcontact._sizes.measure``); every call runs the whole
+    the timer (``jaxcontact._pipeline.sizes.measure``); every call runs the whole
     search with them, broad phase included. The one-call ``bucket_sort``
     measures them again at every call, on the host.
     """

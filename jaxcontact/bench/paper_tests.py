@@ -5,7 +5,7 @@ Test 2 moves the tool (63,001 nodes, face length 20) from d = 0 to 10 in 21
 steps. Each position is answered by ``all_to_all``, ``bucket_sort (sized)``,
 ``swept`` and ``bucket_swept (sized)`` (float32, jit), timed round-robin,
 compile time apart. "(sized)": the bucket sort with its ``Sizes`` measured
-outside the timer (``jaxcontact._sizes.measure``) and its whole search, broad
+outside the timer (``jaxcontact._pipeline.sizes.measure``) and its whole search, broad
 phase included, inside. In Test 2 every method compiles once: the sizes are
 measured for all 21 positions together (the largest of each capacity,
 ``_sizes.largest``), as a simulation would size them. Closest points are
@@ -27,7 +27,7 @@ import jax
 import numpy as np
 
 from jaxcontact import all_to_all, swept
-from jaxcontact._sizes import largest, measure
+from jaxcontact._pipeline.sizes import largest, measure
 from jaxcontact.bench import _run, baselines, oracle
 from jaxcontact.bench.timing import compiled_call, time_interleaved
 from jaxcontact.scenes import paper_scene

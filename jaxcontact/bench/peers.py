@@ -30,7 +30,7 @@ import numpy as np
 
 from jaxcontact import all_to_all
 from jaxcontact._bucket import measure_contacts
-from jaxcontact._sizes import measure
+from jaxcontact._pipeline.sizes import measure
 from jaxcontact.bench import _run, baselines, oracle
 from jaxcontact.scenes import cutting_scene, rough_die_scene
 

@@ -33,7 +33,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxcontact import CrossingList, Search, swept
-from jaxcontact._sizes import measure
+from jaxcontact._pipeline.sizes import measure
 from jaxcontact.bench import _run, baselines, ipc
 from jaxcontact.scenes import cutting_scene, paper_scene
 

@@ -5,7 +5,7 @@ Part 1: on the cutting scene (tool in, ``x_tip = 18``) and the rough die, run
 ``bucket_sort (sized)`` with sizes of shrinking capacity (blocks kept,
 segments per cell) and other cell sizes, all round-robin. "(sized)": the
 bucket sort with ``Sizes`` measured outside the timer
-(``jaxcontact._sizes.measure``), its whole search inside. Each is checked
+(``jaxcontact._pipeline.sizes.measure``), its whole search inside. Each is checked
 against the float64 oracle of the float64 scene: missed and false contacts,
 wrong segments, the largest gap error. Sizes too small for the scene set
 ``overflow`` and miss contacts: the Pareto plot shows that trade.
@@ -29,7 +29,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxcontact import all_to_all, bucket_sort
-from jaxcontact._sizes import measure
+from jaxcontact._pipeline.sizes import measure
 from jaxcontact.bench import _run, oracle
 from jaxcontact.bench.timing import time_interleaved
 from jaxcontact.scenes import Scene, cutting_scene, rough_die_scene

@@ -16,8 +16,8 @@ a depth of cut of 1. Every step:
    them again, inside the step, only when the nodes and the tool together
    moved more than the skin, as the paper recomputes ``d_max`` only every
    n-th step;
-3. a penalty force ``k (-g) n`` on every active slave and the opposite, summed,
-   on the tool (``contact_forces``): its x part is the cutting force, its y
+3. a penalty force ``k (-g) n`` on every active slave (``forces.penalty``) and
+   the opposite, summed, on the tool: its x part is the cutting force, its y
    part the thrust force;
 4. central differences with lumped masses and a little mass-proportional
    damping: ``v += dt a``, ``u += dt v``.
@@ -47,7 +47,8 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
-from jaxcontact import Search, Sizes, Surface, contact_forces
+from jaxcontact import Search, Sizes, Surface
+from jaxcontact.forces import penalty
 from jaxcontact.sim.elastic import Material, Mesh, internal_forces, smallest_altitude
 from jaxcontact.sim.elastic import workpiece_mesh as workpiece_mesh
 from jaxcontact.sim.tool import tool_outline as tool_outline
@@ -253,7 +254,8 @@ def run(
             rebuilt = state.rebuilds > rebuilds
         else:
             rebuilt, contact = jnp.zeros((), bool), at_rest
-        on_slaves, on_tool = contact_forces(contact, controls.stiffness)
+        on_slaves = penalty(contact, surface, controls.stiffness).on_slaves
+        on_tool = -jnp.sum(on_slaves, axis=0)
         elastic = internal_forces(mesh, u, material)
         force = elastic + on_nodes(on_slaves)
         v_before, v = v, decay * v + kick * inverse_mass * force

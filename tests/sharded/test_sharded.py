@@ -22,7 +22,7 @@ from jaxcontact import (
     sharded,
     swept,
 )
-from jaxcontact._sizes import CELLS_ABOVE, measure
+from jaxcontact._pipeline.sizes import CELLS_ABOVE, measure
 from jaxcontact.scenes import cutting_scene, rough_die_scene
 from tests.helpers import assert_same_contact, assert_same_crossing
 

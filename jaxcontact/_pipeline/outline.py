@@ -26,8 +26,8 @@ from typing import NamedTuple
 import jax
 import jax.numpy as jnp
 
-from jaxcontact._inputs import Segments
-from jaxcontact._sort import stable_order
+from jaxcontact._pipeline.segments import Segments
+from jaxcontact._pipeline.sort import stable_order
 from jaxcontact._types import Array
 
 # Up to this many segments, ``_first_match`` uses the M x M table of matches.

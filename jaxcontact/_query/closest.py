@@ -1,10 +1,11 @@
-"""Turning a chosen segment per slave into a ``Contact`` or ``Crossing``.
+"""The closest-point query: each slave's nearest real segment within its radius.
 
-Every method (dense or binned) first decides, without gradients, which
-segment each slave belongs to; then the per-pair kernel is evaluated once more
-for that one pair. The values and their gradients therefore come from the same
-code whatever the search was, and a binned search that picks the same segment
-as the dense one returns bit-identical rows.
+The search decides, without gradients, which segment each slave belongs to
+(the lowest squared distance, exact ties to the lower index); then the pair
+is evaluated once more (``project``) for that one segment, with the vertex
+tie rule (``prefer_outside``). Values and gradients therefore come from the
+same code whatever the search was, and a binned search that picks the same
+segment as the exhaustive one returns bit-identical rows.
 """
 
 from __future__ import annotations
@@ -12,11 +13,14 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
-from jaxcontact._geometry import cross_sign, dot, path_hit, project, unit_normal
-from jaxcontact._inputs import Segments
-from jaxcontact._outline import vertex_neighbours
-from jaxcontact._pairs import allows, pick
-from jaxcontact._types import Array, Contact, Crossing
+from jaxcontact._pipeline import inputs
+from jaxcontact._pipeline.broad import Box
+from jaxcontact._pipeline.geometry import cross_sign, dot, project, squared_distance, unit_normal
+from jaxcontact._pipeline.outline import vertex_neighbours
+from jaxcontact._pipeline.pairs import allows, pick
+from jaxcontact._pipeline.segments import Segments, sanitize_points
+from jaxcontact._query.base import Query
+from jaxcontact._types import Array, Contact, ContactList
 
 
 def _on_chosen(kernel, x: Array, segments: Segments, choice: Array):
@@ -149,28 +153,70 @@ def contact_from_choice(
     )
 
 
-def crossing_from_choice(
-    x_prev: Array, x: Array, segments: Segments, choice: Array, overflow: Array, row_ok: Array
-) -> Crossing:
-    """Builds the ``Crossing`` of paths ``x_prev -> x`` (f[N, 2] each, bad rows zeroed).
+def rounding_reach(segments: Segments, radius):
+    """f[]: ``radius`` plus a bound on how far the search's score (its squared
+    distance) and the reported gap may differ by rounding.
 
-    Arguments as for ``contact_from_choice``.
+    They are two evaluations of one distance D that differ in how ``xi`` is
+    rounded (a product with the inverse length, a quotient) and in the
+    interior's gap being a dot product with the rounded unit normal: each is
+    within a few ulps of ``D + 2 |d|`` (``geometry._offset`` measures from
+    the nearer end, ``|x - a| <= D + |d|``). 64 ulps of ``radius + 4 L``,
+    L the longest real segment, bounds both with room to spare.
     """
-    choice = jax.lax.stop_gradient(choice)
-    has_choice = row_ok & (choice >= 0)
-    index = jnp.maximum(choice, 0)
-    if segments.ok.shape[0] == 0:
-        start = end = jnp.zeros_like(x)
-    else:
-        start, end = segments.start[index], segments.end[index]
-    hit = jax.vmap(path_hit)(x_prev, x, start, end)
-    crossed = has_choice & hit.hit
-    t = jnp.where(crossed, hit.t, 0)
-    point = jnp.where(crossed[:, None], x_prev + t[:, None] * (x - x_prev), 0)
-    return Crossing(
-        t=t,
-        segment=jnp.where(crossed, choice, -1).astype(jnp.int32),
-        point=point,
-        crossed=crossed,
-        overflow=overflow,
-    )
+    lengths = jnp.max(jnp.abs(segments.end - segments.start), axis=-1)
+    longest = 2 * jnp.max(jnp.where(segments.ok, lengths, 0), initial=0)  # >= |d|
+    eps = jnp.finfo(segments.start.dtype).eps
+    return radius + 64 * eps * (radius + 4 * longest)
+
+
+class Closest(Query):
+    """The closest real segment of each slave ``x`` within its radius: a ``Contact``."""
+
+    name = "closest"
+    result = Contact
+    listing = ContactList
+    flag = "found"
+    num_points = 1
+
+    def check(self, points, surface, radius, mask):
+        (x,) = points
+        x, surface, radius, mask = inputs.check_contact_inputs(x, surface, radius, mask)
+        return (x,), surface, radius, mask
+
+    def kernel(self, x, edge):
+        return squared_distance(x, edge)
+
+    def sanitize(self, points, mask):
+        x, ok = sanitize_points(points[0], mask)
+        return (x,), ok
+
+    def pair_reach(self, points, ok, radius):
+        return radius
+
+    def row_boxes(self, points, mask):
+        # Only the mask is given to the cull: a row with a NaN or an infinite
+        # coordinate fails every comparison with the master's box, which is
+        # finite (real segments are) or empty, and ``broad.kept_rows`` tests
+        # the kept rows; a finiteness test per row here would be a pass over
+        # x of its own.
+        return points[0], points[0], mask
+
+    def inflate(self, points, radius, mask):
+        return inputs.reach_of(radius, mask)
+
+    def cell_boxes(self, segments, kept, ok, culled: Box) -> Box:
+        return culled
+
+    def assemble(self, kept, segments, choice, radius, overflow, ok, ruling):
+        rule, tags = ruling
+        return contact_from_choice(kept[0], segments, choice, radius, overflow, ok, rule, tags)
+
+    def reportable(self, choice, score, ok, segments, radius):
+        # Every row the exhaustive form finds, and a few at the radius to
+        # within rounding: the score and the assembled gap round differently.
+        reach = rounding_reach(segments, radius)
+        return ok & (choice >= 0) & (score <= reach * reach)
+
+
+CLOSEST = Closest()

@@ -16,7 +16,7 @@ from typing import NamedTuple
 
 import jax.numpy as jnp
 
-from jaxcontact._inputs import Segments, finite_rows
+from jaxcontact._pipeline.segments import Segments, finite_rows
 from jaxcontact._types import Array
 
 

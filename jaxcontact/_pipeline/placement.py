@@ -77,7 +77,9 @@ def searched_whole(rows: str):
     result's rows split like argument ``rows`` (the slaves) at the bottom.
 
     Goes under ``@jax.jit`` (so that the reshards are part of the program),
-    as ``@searched_whole(rows="x")`` over ``def program(x, surface, ...)``.
+    as ``@searched_whole(rows="x")`` over ``def program(x, surface, ...)``; an
+    argument that is a tuple of row arrays (a query's points) is split like
+    its last.
     """
 
     def wrap(program):
@@ -86,6 +88,8 @@ def searched_whole(rows: str):
         @functools.wraps(program)
         def whole(*args, **kwargs):
             slaves = signature.bind(*args, **kwargs).arguments[rows]
+            if isinstance(slaves, tuple):
+                slaves = slaves[-1]
             split = _explicit_sharding(slaves)
             result = program(*replicated(args), **replicated(kwargs))
             return split_rows(result, split)

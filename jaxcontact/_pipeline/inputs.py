@@ -13,9 +13,6 @@ that nothing NaN reaches a value or a gradient.
 
 from __future__ import annotations
 
-import dataclasses
-import functools
-
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -23,7 +20,7 @@ import numpy as np
 from jaxcontact._types import Array, Surface
 
 
-def _is_concrete(value) -> bool:
+def is_concrete(value) -> bool:
     return not isinstance(value, jax.core.Tracer)
 
 
@@ -104,7 +101,7 @@ def _check_real_indices(segments, mask, num_nodes: int):
     the real segments are not known here, and an index out of range makes
     the segment padding instead (``resolve_segments``).
     """
-    if not (_is_concrete(segments) and _is_concrete(mask)):
+    if not (is_concrete(segments) and is_concrete(mask)):
         return
     values = np.asarray(segments)
     if mask is not None:
@@ -157,7 +154,7 @@ def check_radius(radius, dtype, num_rows: int | None = None, mask=None) -> Array
         raise ValueError(f"radius must be {wanted}; got shape {shape}")
     if np.dtype(jnp.result_type(radius)).kind not in "fiu":
         raise ValueError(f"radius must be real; got dtype {jnp.result_type(radius)}")
-    if _is_concrete(radius) and _is_concrete(mask):
+    if is_concrete(radius) and is_concrete(mask):
         values = np.asarray(radius, np.float64).reshape(-1)
         if shape and mask is not None:
             values = values[np.asarray(mask)]
@@ -197,132 +194,9 @@ def check_labels(name: str, labels, length: int, symbol: str = "N"):
     xp = np if isinstance(labels, np.ndarray) else jnp
     info = np.iinfo(np.int32)
     fits = (labels >= info.min) & (labels <= info.max)
-    if _is_concrete(labels) and not np.all(np.asarray(fits)):
+    if is_concrete(labels) and not np.all(np.asarray(fits)):
         raise ValueError(f"{name} must fit in int32; got {_describe(labels)}")
     return as_array(xp.where(fits, labels, -1).astype(np.int32))
-
-
-def check_pairing(slave_node, slave_body, self_contact, x, surface: Surface, mask):
-    """Checks the pair keywords of a detector for checked slaves ``x``, master
-    ``surface`` and slave ``mask``; returns a ``_pairs.Pairing``."""
-    from jaxcontact._pairs import Pairing
-
-    if not isinstance(self_contact, bool):
-        raise ValueError(f"self_contact must be a bool; got {self_contact!r}")
-    if self_contact and slave_node is None:
-        raise ValueError(
-            "self_contact=True needs slave_node= (i32[N]: the surface node each slave is, "
-            "-1 for none): a slave's neighbourhood is measured from its own node"
-        )
-    num_rows, num_nodes = x.shape[0], surface.nodes.shape[0]
-    slave_node = check_labels("slave_node", slave_node, num_rows)
-    slave_body = check_labels("slave_body", slave_body, num_rows)
-    if slave_node is not None and _is_concrete(slave_node) and _is_concrete(mask):
-        values = np.asarray(slave_node)
-        if mask is not None:
-            values = values[np.asarray(mask)]
-        bad = (values < -1) | (values >= num_nodes)
-        if bad.any():
-            raise ValueError(
-                f"slave_node must be -1 or index surface.nodes, in [-1, {num_nodes - 1}]; "
-                f"got {int(values[bad][0])}"
-            )
-    return Pairing(slave_node, slave_body, self_contact)
-
-
-@functools.partial(
-    jax.tree_util.register_dataclass,
-    data_fields=["start", "end", "ok", "indices", "tags"],
-    meta_fields=["num_nodes"],
-)
-@dataclasses.dataclass(frozen=True)
-class Segments:
-    """Master segments resolved to end points, with bad ones neutralised.
-
-    A pytree whose node count is static, so it passes whole through ``cond``,
-    ``custom_vmap`` and ``jit``.
-    """
-
-    start: Array  # f[M, 2]  a; zeros where not ok
-    end: Array  # f[M, 2]  b; zeros where not ok
-    ok: Array  # bool[M]  real, finite and of non-zero length
-    indices: Array | None  # i32[M, 2]  the node indices of each segment's ends
-    num_nodes: int  # P, static: ok segments' node indices lie in [0, P)
-    tags: object = None  # _pairs.SegmentTags: what the pair rule reads, or None
-
-
-def ends_of(nodes: Array, indices: Array) -> Array:
-    """f[M, 2, 2]: the nodes at ``indices`` (i32[M, 2]), read clamped into range.
-
-    An index out of range reads some node (zeros when there are no nodes,
-    where a gather cannot run at all): the caller masks those segments.
-    """
-    if nodes.shape[0] == 0:
-        return jnp.zeros(indices.shape + (2,), nodes.dtype)
-    return nodes[jnp.clip(indices, 0, nodes.shape[0] - 1)]
-
-
-def resolve_segments(surface: Surface) -> Segments:
-    """End points of every segment; masked, non-finite or zero-length ones flagged."""
-    ends = ends_of(surface.nodes, surface.segments)
-    start, end = ends[:, 0], ends[:, 1]
-    num_nodes = surface.nodes.shape[0]
-    # Masked segments' indices may be anything (a sentinel such as -1), and
-    # under jit even a real segment's cannot be checked: a segment with an
-    # index out of range reads a node it does not name, and is not real.
-    in_range = jnp.all((surface.segments >= 0) & (surface.segments < num_nodes), axis=-1)
-    finite = jnp.all(jnp.isfinite(start) & jnp.isfinite(end), axis=-1) & in_range
-    ok = finite if surface.mask is None else finite & surface.mask
-    start = jnp.where(ok[:, None], start, 0)
-    end = jnp.where(ok[:, None], end, 0)
-    length_squared = jnp.sum((end - start) ** 2, axis=-1)
-    ok = ok & (length_squared > 0) & jnp.isfinite(length_squared)
-    start, end = jnp.where(ok[:, None], start, 0), jnp.where(ok[:, None], end, 0)
-    return Segments(start, end, ok, surface.segments, num_nodes)
-
-
-def with_pool(surface: Surface, pool) -> Surface:
-    """``surface`` with the masked segments of ``pool`` (bool[M] or None)
-    counted as real: what a search sizes for and lists in advance."""
-    if pool is None or surface.mask is None:
-        return surface
-    return surface._replace(mask=surface.mask | pool)
-
-
-def finite_rows(points: Array) -> Array:
-    """bool[...]: both coordinates of each point (f[..., 2]) are finite.
-
-    The two columns taken apart, not ``jnp.all(..., axis=-1)``: XLA's CPU
-    code reduces an axis of length 2 as a loop per row, and a pass over N
-    rows measured about twice as long that way (``squared_norm``).
-    """
-    return jnp.isfinite(points[..., 0]) & jnp.isfinite(points[..., 1])
-
-
-def squared_norm(vectors: Array) -> Array:
-    """f[...]: ``x^2 + y^2`` of each vector (f[..., 2]): what
-    ``jnp.sum(vectors**2, axis=-1)`` computes, to rounding (XLA may fuse the
-    multiply and the add). Used only where a last bit does not matter (the
-    skin check's threshold, the self-contact window of a path).
-
-    Written per column: XLA's CPU code runs ``jnp.sum(..., axis=-1)`` over a
-    length-2 axis as a loop per row; the skin check (``_bucket.expired``,
-    jitted alone) on 81,939 rows took 0.36-0.38 ms that way and 0.2 ms per
-    column (benchmarks/search_step.py times the whole step before and after).
-    """
-    return vectors[..., 0] * vectors[..., 0] + vectors[..., 1] * vectors[..., 1]
-
-
-def rows_ok(points: Array, mask: Array | None) -> Array:
-    """bool[N]: the row is finite and not masked out."""
-    ok = finite_rows(points)
-    return ok if mask is None else ok & mask
-
-
-def sanitize_points(points: Array, mask: Array | None) -> tuple[Array, Array]:
-    """Returns ``(points with bad rows zeroed, bool[N] row ok)``."""
-    ok = rows_ok(points, mask)
-    return jnp.where(ok[:, None], points, 0), ok
 
 
 def check_contact_inputs(x, surface: Surface, radius, mask):
@@ -352,12 +226,14 @@ def check_slaves(x, x_prev, mask):
     return None, x, check_mask("mask", mask, x.shape[0])
 
 
-def paths_ok(x_prev: Array, x: Array, mask: Array | None) -> Array:
-    """bool[N]: both ends of the path are finite and the row is not masked out."""
-    return rows_ok(x, rows_ok(x_prev, mask))
-
-
-def sanitize_paths(x_prev: Array, x: Array, mask: Array | None) -> tuple[Array, Array, Array]:
-    """Returns both positions with bad rows zeroed and bool[N] row ok (``paths_ok``)."""
-    ok = paths_ok(x_prev, x, mask)
-    return jnp.where(ok[:, None], x_prev, 0), jnp.where(ok[:, None], x, 0), ok
+def require_concrete(name: str, values, hint: str | None = None):
+    """A ``ValueError`` when ``values`` are traced: sizes are measured on the host."""
+    if any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree.leaves(values)):
+        hint = hint or (
+            "use jaxcontact.Search (allocate once outside, then search.closest / "
+            "search.swept inside)"
+        )
+        raise ValueError(
+            f"{name} measures its sizes from concrete data, so it cannot run under jit, "
+            f"vmap or grad of its inputs: {hint}"
+        )

@@ -42,14 +42,17 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import warnings
 from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
-from jaxcontact._inputs import Segments
-from jaxcontact._outline import arc_distance, chains
-from jaxcontact._types import Array
+from jaxcontact._pipeline.inputs import check_labels, is_concrete
+from jaxcontact._pipeline.outline import arc_distance, chains
+from jaxcontact._pipeline.segments import Segments
+from jaxcontact._types import Array, Surface
 
 # The self-contact neighbourhood, in multiples of a slave's reach (above).
 SELF_CONTACT_REACH = 4.0
@@ -70,8 +73,39 @@ class Rule:
     meta_fields=["self_contact"],
 )
 @dataclasses.dataclass(frozen=True)
-class Pairing:
-    """The detectors' pair keywords, checked (``_inputs.check_pairing``)."""
+class Pairs:
+    """The pair rule: which slave may meet which segment (the rule above).
+
+    One value, passed as ``pairs=`` to every detector and to ``Search``'s
+    methods. The default, ``Pairs()``, lets every slave meet every real
+    segment. A pytree: ``slave_node`` and ``slave_body`` are traced arrays
+    (padded, batched and sharded with the slaves), ``self_contact`` is
+    static.
+
+    Attributes:
+      slave_node: i32[N] or None: the index in ``surface.nodes`` that each
+        slave is (-1 for none). A slave never meets a segment that has its
+        own node as an end.
+      slave_body: i32[N] or None: each slave's body. With ``surface.body``
+        too, a slave meets only other bodies' segments.
+      self_contact: a slave also meets its own body's segments, except
+        those within its neighbourhood along the outline
+        (``SELF_CONTACT_REACH`` times its reach: the radius, or a path's
+        length). Needs ``slave_node``; with no body labels the whole surface
+        is one body.
+
+    Example:
+      >>> import jax.numpy as jnp
+      >>> from jaxcontact import Pairs, Surface, all_to_all
+      >>> square = Surface(
+      ...     jnp.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]),
+      ...     jnp.array([[0, 1], [1, 2], [2, 3], [3, 0]]),
+      ... )
+      >>> own = Pairs(slave_node=jnp.array([0, 1, 2, 3]))  # each corner is a slave
+      >>> contact = all_to_all(square.nodes, square, radius=1.5, pairs=own)
+      >>> contact.segment.tolist()  # the nearest segment not through its own corner
+      [1, 2, 0, 0]
+    """
 
     slave_node: Array | None = None  # i32[N]  surface node of each slave, -1 for none
     slave_body: Array | None = None  # i32[N]  body of each slave
@@ -87,7 +121,7 @@ class Pairing:
         return rule if (rule.own_node or rule.bodies or rule.self_contact) else None
 
 
-NO_PAIRING = Pairing()
+EVERY_PAIR = Pairs()
 
 
 class RowTags(NamedTuple):
@@ -111,25 +145,25 @@ class SegmentTags(NamedTuple):
     loop: Array | None  # f[M]  the chain's length if closed, else inf
 
 
-def tag(pairing: Pairing, segments: Segments, body, reach: Array):
+def tag(pairs: Pairs, segments: Segments, body, reach: Array):
     """``(rule, row tags, segments with their tags)`` for one search.
 
     ``reach`` (f[] or f[N]) is each slave's reach: the self-contact window is
     ``SELF_CONTACT_REACH`` times it. Tags carry no gradient. With no rule,
     ``(None, None, segments)``.
     """
-    rule = pairing.rule(body)
+    rule = pairs.rule(body)
     if rule is None:
         return None, None, segments
     num_nodes = segments.num_nodes
     node = body_of_row = chain = arc = window = None
     nodes = segment_body = segment_chain = low = high = loop = None
     if rule.own_node:
-        node = pairing.slave_node
+        node = pairs.slave_node
         node = jnp.where((node >= 0) & (node < num_nodes), node, -1).astype(jnp.int32)
         nodes = segments.indices
     if rule.bodies and not rule.self_contact:
-        body_of_row, segment_body = pairing.slave_body, body
+        body_of_row, segment_body = pairs.slave_body, body
     if rule.self_contact:
         outline = chains(segments)
         at = jnp.maximum(node, 0)
@@ -182,3 +216,51 @@ def pick(tags, index: Array):
     if tags is None:
         return None
     return jax.tree.map(lambda values: values[index], tags)
+
+
+# The keywords ``Pairs`` replaced; each warns and names it.
+PAIR_KEYWORDS = ("slave_node", "slave_body", "self_contact")
+
+
+def check(pairs, x, surface: Surface, mask, stacklevel: int = 3, **keywords) -> Pairs:
+    """``pairs`` checked against the slaves ``x`` (f[N, 2]), the master
+    ``surface`` and the slave ``mask``; the replaced keywords (``keywords``:
+    ``slave_node``, ``slave_body``, ``self_contact``) folded in with a
+    ``DeprecationWarning``."""
+    given = {name: value for name, value in keywords.items() if value not in (None, False)}
+    unknown = set(keywords) - set(PAIR_KEYWORDS)
+    if unknown:
+        raise TypeError(f"unexpected keyword arguments {sorted(unknown)}")
+    if pairs is None:
+        pairs = EVERY_PAIR
+    if not isinstance(pairs, Pairs):
+        raise ValueError(f"pairs must be a jaxcontact.Pairs; got {type(pairs).__name__}")
+    if given:
+        words = ", ".join(f"{name}=" for name in given)
+        warnings.warn(
+            f"the keywords {words} are replaced by pairs=jaxcontact.Pairs({words}...)",
+            DeprecationWarning,
+            stacklevel=stacklevel,
+        )
+        pairs = dataclasses.replace(pairs, **given)
+    if not isinstance(pairs.self_contact, bool):
+        raise ValueError(f"Pairs.self_contact must be a bool; got {pairs.self_contact!r}")
+    if pairs.self_contact and pairs.slave_node is None:
+        raise ValueError(
+            "Pairs(self_contact=True) needs slave_node= (i32[N]: the surface node each slave "
+            "is, -1 for none): a slave's neighbourhood is measured from its own node"
+        )
+    num_rows, num_nodes = x.shape[0], surface.nodes.shape[0]
+    slave_node = check_labels("Pairs.slave_node", pairs.slave_node, num_rows)
+    slave_body = check_labels("Pairs.slave_body", pairs.slave_body, num_rows)
+    if slave_node is not None and is_concrete(slave_node) and is_concrete(mask):
+        values = np.asarray(slave_node)
+        if mask is not None:
+            values = values[np.asarray(mask)]
+        bad = (values < -1) | (values >= num_nodes)
+        if bad.any():
+            raise ValueError(
+                f"Pairs.slave_node must be -1 or index surface.nodes, in [-1, {num_nodes - 1}]; "
+                f"got {int(values[bad][0])}"
+            )
+    return Pairs(slave_node, slave_body, pairs.self_contact)

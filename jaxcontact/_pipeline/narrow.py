@@ -14,15 +14,14 @@ from typing import NamedTuple
 import jax
 import jax.numpy as jnp
 
-from jaxcontact._broad import Box
-from jaxcontact._cells import CellLists, list_candidates, segments_in_slots
-from jaxcontact._geometry import Edge, edge
-from jaxcontact._inputs import Segments
-from jaxcontact._lowest import UNROLL, lowest_in_blocks, lowest_score
-from jaxcontact._pairs import pick
-from jaxcontact._sizes import Sizes
-from jaxcontact._sort import stable_order
-from jaxcontact._types import Array
+from jaxcontact._pipeline.broad import Box
+from jaxcontact._pipeline.cells import CellLists, list_candidates, segments_in_slots
+from jaxcontact._pipeline.geometry import Edge, edge
+from jaxcontact._pipeline.lowest import UNROLL, lowest_in_blocks, lowest_score
+from jaxcontact._pipeline.pairs import pick
+from jaxcontact._pipeline.segments import Segments
+from jaxcontact._pipeline.sort import stable_order
+from jaxcontact._types import Array, Sizes
 
 # Up to this many pairs, ``search_all`` scores the whole plane at once (``_lowest_in_plane``).
 PLANE_PAIRS = 1 << 15

@@ -20,70 +20,37 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxcontact import _inputs
-from jaxcontact._broad import Box, broad_phase, conservative_margin, enclosing, segment_boxes
-from jaxcontact._cells import Grid, bin_segments
-from jaxcontact._padded import size_class
-from jaxcontact._placement import searched_whole
-from jaxcontact._types import Array, Surface
+from jaxcontact._pipeline import driver
+from jaxcontact._pipeline import inputs as _inputs
+from jaxcontact._pipeline import segments as _segments
+from jaxcontact._pipeline.broad import (
+    Box,
+    broad_phase,
+    conservative_margin,
+    enclosing,
+    segment_boxes,
+)
+from jaxcontact._pipeline.cells import Grid, bin_segments
+from jaxcontact._pipeline.placement import searched_whole
+from jaxcontact._types import CELLS_ABOVE, CHUNK_ROWS, Array, Sizes, Surface
 
-# With this many segments or fewer, each kept slave meets every segment: a
-# running minimum over M broadcast segments beats per-slave candidate gathers
-# (benchmarks/bucket.py measures the crossover). ``Search(cells_above=...)``.
-CELLS_ABOVE = 48
-# Kept slaves are searched in chunks of this many rows, fullest lists first.
-CHUNK_ROWS = 2048
 
+def size_class(count: int, smallest: int = 1) -> int:
+    """The least ``m * 2**e >= count`` with ``m`` in [4, 8): at most 1/4 above.
 
-@dataclasses.dataclass(frozen=True)
-class Sizes:
-    """Static sizes of a bucket sort: hashable, a static field of ``SearchState``.
+    Four classes per doubling: a sweep over 200 to 20,000 rows meets 27.
+    Counts up to 8 are their own class, below ``smallest`` it is ``smallest``,
+    and ``0`` stays ``0`` (the empty scene).
 
-    A change of any field compiles the detectors anew.
-
-    Attributes:
-      num_slaves: N, the slave count the sizes were measured for.
-      block_size: slaves culled together (consecutive rows).
-      block_capacity: most blocks kept near the master.
-      for_paths: made for ``bucket_swept`` (path boxes) rather than ``bucket_sort``.
-      use_cells: bin the segments in cells; False tests each kept slave
-        against every segment.
-      grid_shape: cells in x and in y.
-      cell_size: smallest cell edge; cells grow when the region outgrows the grid.
-      span: most cells a segment's inflated box may cover, in x and in y.
-      cell_capacity: most segments one cell's list may hold.
-      chunk_rows: kept slaves searched together, longest cell lists first.
-      buckets: 0 gives each of the ``grid_shape`` cells its own list; more
-        hashes the cells into that many lists (a grid of that many more
-        cells than slaves would otherwise need wider cells).
-      contact_capacity: entries of the compact result (``ContactList``,
-        ``Search(compact=True)``); 0 (the default) returns the dense
-        ``Contact`` of N rows.
+    Example:
+      >>> [size_class(n) for n in (0, 5, 16, 17, 100, 1000, 81_939)]
+      [0, 5, 16, 20, 112, 1024, 98304]
     """
-
-    num_slaves: int
-    block_size: int
-    block_capacity: int
-    for_paths: bool = False
-    use_cells: bool = False
-    grid_shape: tuple[int, int] = (1, 1)
-    cell_size: float = 0.0
-    span: tuple[int, int] = (1, 1)
-    cell_capacity: int = 1
-    chunk_rows: int = CHUNK_ROWS
-    contact_capacity: int = 0
-    buckets: int = 0
-
-    def __post_init__(self):
-        if isinstance(self.buckets, bool) or not isinstance(self.buckets, int) or self.buckets < 0:
-            raise ValueError(
-                f"Sizes.buckets must be an int >= 0 (0: a list per cell); got {self.buckets!r}"
-            )
-
-    @property
-    def slave_capacity(self) -> int:
-        """Slaves the narrow phase holds: ``block_capacity * block_size``."""
-        return self.block_capacity * self.block_size
+    if count <= 0:
+        return 0
+    count = max(count, smallest)
+    shift = max(0, count.bit_length() - 3)
+    return -(-count // (1 << shift)) << shift
 
 
 def grow(count: float, slack: float, least: int = 1) -> int:
@@ -118,14 +85,14 @@ class _Measured(NamedTuple):
 @searched_whole(rows="x")
 def _measure(x_prev, x, surface, radius, mask, block_size: int, num_blocks: int) -> _Measured:
     # Jitted: run op by op, this took 5-7 s at every new shape (measured).
-    segments = _inputs.resolve_segments(surface)
+    segments = _segments.resolve_segments(surface)
     if x_prev is not None:
-        x_prev, x, slave_ok = _inputs.sanitize_paths(x_prev, x, mask)
+        x_prev, x, slave_ok = _segments.sanitize_paths(x_prev, x, mask)
         query_low, query_high, query = jnp.minimum(x_prev, x), jnp.maximum(x_prev, x), x_prev
         travel = jnp.max(jnp.where(slave_ok, jnp.max(jnp.abs(x - x_prev), axis=-1), 0), initial=0)
         cull_reach = jnp.zeros((), x.dtype)
     else:
-        x, slave_ok = _inputs.sanitize_points(x, mask)
+        x, slave_ok = _segments.sanitize_points(x, mask)
         query_low = query_high = query = x
         travel = cull_reach = radius
     _, blocks = broad_phase(
@@ -358,3 +325,61 @@ def fitted(sizes: Sizes, x, surface: Surface, **kwargs) -> Sizes:
     batched = np.ndim(x) == 3
     fit = (measure_batch if batched else measure)(x, surface, layout=sizes, **kwargs)
     return largest(sizes, fit)
+
+
+def check_sizes(sizes, num_slaves: int, for_paths: bool):
+    """Sizes made for this many slaves and this query, or a ``ValueError``."""
+    if not isinstance(sizes, Sizes):
+        raise ValueError(f"sizes must be jaxcontact Sizes; got {type(sizes).__name__}")
+    if sizes.num_slaves != num_slaves:
+        raise ValueError(f"sizes were made for {sizes.num_slaves} slaves; x has {num_slaves} rows")
+    if sizes.for_paths != for_paths:
+        wanted = "paths (allocate with x_prev=)" if for_paths else "closest points (a radius)"
+        raise ValueError(f"sizes were made for the other query; this one needs sizes for {wanted}")
+
+
+def room_for_every_slot(sizes: Sizes) -> Sizes:
+    """``sizes`` whose list form has an entry for every kept slave: it cannot overflow."""
+    return dataclasses.replace(sizes, contact_capacity=max(1, sizes.slave_capacity))
+
+
+def entries_needed(query, points, surface, radius, mask, sizes: Sizes, pairs) -> Array:
+    """i32[]: the entries ``query``'s list form needs for this data (the
+    kept slaves it assembles: ``query.reportable``).
+
+    Runs the list form with an entry for every kept slave (a program of its
+    own); ``vmap`` it for a batch.
+    """
+    wide = room_for_every_slot(sizes)
+    found = driver.sized_jit(
+        query, points, surface, radius, mask, sizes=wide, with_needed=True, pairs=pairs
+    )
+    return found[1]
+
+
+def with_entries(
+    query, points, surface, radius, mask, sizes: Sizes, slack: float, pairs, axes=None
+) -> Sizes:
+    """``sizes`` with the list form's capacity: the entries needed now times
+    ``slack`` (at least 1), as ``measure`` sizes the rest (concrete inputs).
+    With ``axes`` (``vmap``'s ``in_axes`` of ``points, surface, mask,
+    pairs``, the points a tuple mapped alike), the largest need of a batch."""
+
+    def count(points, surface, mask, pairs):
+        return entries_needed(query, points, surface, radius, mask, sizes, pairs)
+
+    if axes is not None:
+        count = jax.vmap(count, axes)
+    needed = int(np.max(np.asarray(count(points, surface, mask, pairs))))
+    return dataclasses.replace(sizes, contact_capacity=grow(needed, slack))
+
+
+def merged(sizes: Sizes, old: Sizes | None) -> Sizes:
+    """``sizes`` at least as large as ``old``'s (None: as they are), for as many slaves."""
+    if old is None:
+        return sizes
+    if old.num_slaves != sizes.num_slaves:
+        raise ValueError(
+            f"at_least was allocated for {old.num_slaves} slaves; x has {sizes.num_slaves}"
+        )
+    return largest(sizes, old)

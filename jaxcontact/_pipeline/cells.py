@@ -22,18 +22,15 @@ cell many times wider.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, NamedTuple
+from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
 
-from jaxcontact._broad import Box, enclosing
-from jaxcontact._sort import sorted_pairs, stable_order
-from jaxcontact._types import Array
-
-if TYPE_CHECKING:
-    from jaxcontact._inputs import Segments
-    from jaxcontact._sizes import Sizes
+from jaxcontact._pipeline.broad import Box, enclosing
+from jaxcontact._pipeline.segments import Segments
+from jaxcontact._pipeline.sort import sorted_pairs, stable_order
+from jaxcontact._types import Array, Sizes
 
 
 class Grid(NamedTuple):

@@ -25,30 +25,13 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from jaxcontact._pipeline.sizes import size_class
 from jaxcontact._types import Surface
 
 # Scenes at least this small share one padded shape: their programs cost
 # the same to run, and tests and notebooks make many of them.
 SMALLEST_ROWS = 16
 SMALLEST_SEGMENTS = 8
-
-
-def size_class(count: int, smallest: int = 1) -> int:
-    """The least ``m * 2**e >= count`` with ``m`` in [4, 8): at most 1/4 above.
-
-    Four classes per doubling: a sweep over 200 to 20,000 rows meets 27.
-    Counts up to 8 are their own class, below ``smallest`` it is ``smallest``,
-    and ``0`` stays ``0`` (the empty scene).
-
-    Example:
-      >>> [size_class(n) for n in (0, 5, 16, 17, 100, 1000, 81_939)]
-      [0, 5, 16, 20, 112, 1024, 98304]
-    """
-    if count <= 0:
-        return 0
-    count = max(count, smallest)
-    shift = max(0, count.bit_length() - 3)
-    return -(-count // (1 << shift)) << shift
 
 
 def _traced(*values) -> bool:
@@ -63,6 +46,8 @@ def _on_several_devices(*values) -> bool:
 
 
 def _on_cpu(*values) -> bool:
+    if _traced(values):
+        return False
     return all(
         not isinstance(leaf, jax.Array) or next(iter(leaf.sharding.device_set)).platform == "cpu"
         for leaf in jax.tree.leaves(values)
@@ -113,44 +98,32 @@ _pad_on_device = jax.jit(
 )
 
 
-def pad_scene(slaves: tuple, mask, surface: Surface, extras=None):
+def pad_scene(slaves: tuple, mask, surface: Surface, extras=None, others=None):
     """``(slaves, mask, surface, extras, num_rows)`` padded to their size classes.
 
     ``slaves`` are the checked f[N, 2] arrays of one query (``(x,)`` or
     ``(x_prev, x)``); ``extras`` a pytree of other per-row arrays (a radius
-    per slave, the pair keywords), padded with zeros. Returns them
-    unchanged, with ``num_rows = None``, when padding would not help: traced
-    inputs, arrays spread over several devices, empty scenes.
+    per slave, the pair rule), padded with zeros; ``others`` the call's
+    remaining arguments, not padded. Returns them unchanged, with
+    ``num_rows = None``, when padding would not help: any argument traced
+    (the caller's program is compiled at its own shapes), arrays spread over
+    several devices, empty scenes.
     """
     num_rows, num_segments = slaves[0].shape[0], surface.segments.shape[0]
     num_nodes = surface.nodes.shape[0]
     rows = size_class(num_rows, SMALLEST_ROWS)
     segments = size_class(num_segments, SMALLEST_SEGMENTS)
     nodes = size_class(num_nodes, SMALLEST_SEGMENTS)
+    everything = (slaves, mask, surface, extras, others)
     # Scenes already at their class are passed the same way (with a row
     # mask), so that they share its program too.
-    if (
-        num_rows == 0
-        or num_segments == 0
-        or _traced(slaves, mask, surface, extras)
-        or _on_several_devices(slaves, mask, surface, extras)
-    ):
+    if num_rows == 0 or num_segments == 0 or _traced(everything) or _on_several_devices(everything):
         return slaves, mask, surface, extras, None
     # On the CPU, NumPy pads without compiling anything.
     on_cpu = _on_cpu(slaves, mask, surface, extras)
     pad = functools.partial(_pad_arrays, module=np) if on_cpu else _pad_on_device
     padded = pad(slaves, mask, surface, extras, rows=rows, segments=segments, nodes=nodes)
     return *padded, num_rows
-
-
-def pad_contact_scene(x, mask, surface: Surface, radius, pairing):
-    """``pad_scene`` for a closest-point query: ``(x, mask, surface, radius,
-    pairing, num_rows)``, with a radius per slave padded as the rows are."""
-    per_row = radius if np.ndim(radius) else None
-    (x,), mask, surface, (per_row, pairing), num_rows = pad_scene(
-        (x,), mask, surface, (per_row, pairing)
-    )
-    return x, mask, surface, radius if per_row is None else per_row, pairing, num_rows
 
 
 @functools.partial(jax.jit, static_argnames="num_rows")

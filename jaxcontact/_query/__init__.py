@@ -1,0 +1,1 @@
+"""The queries a search answers: one protocol (``base``), one module per query."""
