@@ -269,7 +269,9 @@ def bucket_swept(
     return _finish(found, points, surface, "flat", 0.0, num_rows)
 
 
-def at_sizes(query, points: tuple, surface, radius, mask, sizes: Sizes, candidates=None, pairs=None):
+def at_sizes(
+    query, points: tuple, surface, radius, mask, sizes: Sizes, candidates=None, pairs=None
+):
     """``query``'s bucket sort at given ``Sizes`` (and reused ``candidates``),
     its inputs checked as the one-call forms check them, nothing padded:
     what a ``Search`` step runs, for the tests and the benchmarks. Runs

@@ -201,7 +201,7 @@ def _weight(two_pass: bool) -> float:
     return 0.5 if two_pass else 1.0
 
 
-@functools.partial(jax.jit, static_argnames=("num_slaves", "two_pass"))
+@functools.partial(jax.jit, static_argnames=("num_slaves", "two_pass", "axis_name"))
 def penalty(
     contact: Contact | ContactList,
     surface: Surface,
@@ -209,6 +209,7 @@ def penalty(
     *,
     num_slaves: int | None = None,
     two_pass: bool = False,
+    axis_name: str | None = None,
 ) -> Forces:
     """The normal penalty force on each active slave and its reaction on the master's nodes.
 
@@ -219,6 +220,10 @@ def penalty(
       num_slaves: N, for a ``ContactList``.
       two_pass: weight each force by 1/2 (both bodies searched as slaves
         and masters in one call; see the module's notes).
+      axis_name: inside ``jax.shard_map`` with the slaves split over this
+        mesh axis, the master's reaction is summed over the devices (a
+        ``psum``). Under ``jit`` with sharded inputs XLA inserts that
+        collective itself.
 
     Returns:
       ``Forces``: ``on_slaves`` f[N, 2] is ``stiffness * (-gap) * normal``
@@ -240,7 +245,10 @@ def penalty(
     stiffness = _per_entry("stiffness", stiffness, entries, num_slaves, dtype)
     depth = jnp.where(entries.active, -entries.gap, 0)
     force = (_weight(two_pass) * stiffness * depth)[:, None] * entries.normal
-    return _assemble(entries, force, surface, num_slaves)
+    forces = _assemble(entries, force, surface, num_slaves)
+    if axis_name is not None:
+        forces = forces._replace(on_master=jax.lax.psum(forces.on_master, axis_name))
+    return forces
 
 
 def _non_negative(name: str, value, strictly: bool = False):

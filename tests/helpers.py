@@ -27,6 +27,7 @@ import jaxcontact
 from jaxcontact._detect import at_sizes
 from jaxcontact._query.closest import CLOSEST
 from jaxcontact._query.swept import SWEPT
+from jaxcontact.forces import penalty
 from tests.oracle import OracleContact, OracleCrossing, oracle_contact, oracle_crossing
 
 # Ulps of the local scale allowed for values built from a handful of
@@ -385,6 +386,12 @@ def assert_same_crossing(binned, dense, degenerate=False):
 # first; tests of the pipeline itself (property tests at one compiled shape,
 # starved sizes that must overflow, chunked searches) call the sized stages
 # directly, with the input checks the public detectors make.
+
+
+def penalty_total(contact, surface, stiffness, **keywords):
+    """``(on_slaves, the master's total force)`` of ``forces.penalty``."""
+    forces = penalty(contact, surface, stiffness, **keywords)
+    return forces.on_slaves, jnp.sum(forces.on_master, axis=0)
 
 
 def sized_bucket_sort(x, surface, *, radius, mask=None, sizes, candidates=None, pairs=None):

@@ -9,12 +9,11 @@ from jaxcontact import (
     Search,
     Surface,
     all_to_all,
-    contact_forces,
     swept,
 )
 from jaxcontact._pipeline.sizes import measure
 from jaxcontact.scenes import cutting_scene, rough_die_scene
-from tests.helpers import FLOAT, assert_same_contact, assert_same_crossing
+from tests.helpers import FLOAT, assert_same_contact, assert_same_crossing, penalty_total
 
 # The tool in, half in and clear of the workpiece: very different needs.
 TIPS = (12.0, 18.0, 20.5)
@@ -40,7 +39,7 @@ def _row(tree, i):
     return jax.tree.map(lambda v: v if v.ndim == 0 else v[i], tree)
 
 
-@pytest.mark.parametrize("method", ["dense", "binned"])
+@pytest.mark.parametrize("method", ["unbinned", "binned"])
 def test_one_allocation_for_a_batch_of_contacts_equals_a_loop(method):
     scenes, _, x, surface, mask = _batch()
     search = Search(radius=RADIUS, method=method)
@@ -77,7 +76,7 @@ def test_one_allocation_for_a_batch_of_paths_equals_a_loop():
 def test_a_shared_surface_is_allocated_for_every_scene():
     scenes, _, x, _, _ = _batch()
     shared = scenes[1].surface
-    search = Search(radius=RADIUS, method="dense")
+    search = Search(radius=RADIUS, method="unbinned")
     state = search.allocate(x, shared)
     batched, _ = jax.vmap(search.closest, in_axes=(0, 0, None))(state, x, shared)
     for i in range(len(scenes)):
@@ -88,7 +87,7 @@ def test_a_batch_allocation_grows_sizes_that_another_scene_outgrows():
     # Measured on the clear scene alone the sizes keep one block; the batch's
     # must hold the deep cut as well, and say so by not overflowing.
     scenes, _, x, surface, _ = _batch()
-    search = Search(radius=RADIUS, method="dense")
+    search = Search(radius=RADIUS, method="unbinned")
     lone = measure(scenes[2].x, scenes[2].surface, radius=RADIUS, use_cells=False)
     assert lone.block_capacity == 1
     detect = jax.jit(jax.vmap(search.closest))
@@ -114,23 +113,23 @@ def test_dense_detectors_and_forces_map_over_a_batch():
     scenes, x_prev, x, surface, mask = _batch(FLOAT)
     contact = jax.vmap(lambda x, s, m: all_to_all(x, s, radius=RADIUS, mask=m))(x, surface, mask)
     crossing = jax.vmap(lambda p, x, s, m: swept(p, x, s, mask=m))(x_prev, x, surface, mask)
-    forces, on_tool = jax.vmap(lambda c: contact_forces(c, 1e3))(contact)
+    forces, on_tool = jax.vmap(lambda c, s: penalty_total(c, s, 1e3))(contact, surface)
     for i, scene in enumerate(scenes):
         one = all_to_all(scene.x, scene.surface, radius=RADIUS, mask=mask[i])
         for field in ("gap", "segment", "found", "active"):
             np.testing.assert_array_equal(getattr(contact, field)[i], getattr(one, field))
         path = swept(scene.x_prev, scene.x, scene.surface, mask=mask[i])
         np.testing.assert_array_equal(crossing.t[i], path.t)
-        single, total = contact_forces(one, 1e3)
+        single, total = penalty_total(one, scene.surface, 1e3)
         np.testing.assert_allclose(forces[i], single)
         np.testing.assert_allclose(on_tool[i], total)
 
 
-def test_contact_forces_push_active_slaves_out_and_balance_on_the_master():
+def test_penalty_pushes_active_slaves_out_and_balances_on_the_master():
     scene = cutting_scene(2_000, 18.0, dtype=FLOAT)
     contact = all_to_all(scene.x, scene.surface, radius=RADIUS)
     assert int(contact.active.sum()) > 0
-    on_slaves, on_master = contact_forces(contact, 2.0)
+    on_slaves, on_master = penalty_total(contact, scene.surface, 2.0)
     active = np.asarray(contact.active)
     # Along the outward normal, of size stiffness * depth; zero elsewhere.
     np.testing.assert_allclose(

@@ -15,9 +15,9 @@ import numpy as np
 import pytest
 
 import jaxcontact
-from jaxcontact import Search, Surface, all_to_all, bucket_sort, bucket_swept, swept
-from jaxcontact._pipeline.inputs import resolve_segments
+from jaxcontact import Pairs, Search, Surface, all_to_all, bucket_sort, bucket_swept, swept
 from jaxcontact._pipeline.outline import chains
+from jaxcontact._pipeline.segments import resolve_segments
 from tests.helpers import FLOAT, local_atol
 from tests.oracle import closest_point, oracle_chains, oracle_contact, oracle_crossing
 
@@ -48,6 +48,10 @@ def two_rings(dtype=FLOAT, sizes=(24, 20)):
 
 
 def oracle_of(x, surface, radius, **keywords):
+    rule = keywords.pop("pairs", None)
+    if rule is not None:
+        keywords.update(slave_node=rule.slave_node, slave_body=rule.slave_body)
+        keywords.update(self_contact=rule.self_contact)
     body = None if surface.body is None else np.asarray(surface.body)
     mask = None if surface.mask is None else np.asarray(surface.mask)
     return oracle_contact(
@@ -91,7 +95,7 @@ ONE_CALL = {
 def test_one_call_over_two_bodies_is_each_body_against_the_other_alone(detector):
     x, surface, slave_node, slave_body = two_rings()
     detect = ONE_CALL[detector]
-    both = detect(x, surface, radius=0.3, slave_node=slave_node, slave_body=slave_body)
+    both = detect(x, surface, radius=0.3, pairs=Pairs(slave_node, slave_body))
     expected = oracle_of(x, surface, 0.3, slave_node=slave_node, slave_body=slave_body)
     assert_matches_oracle(both, expected, x, surface, FLOAT)
     assert 0 < int(both.active.sum()) < len(x)
@@ -104,7 +108,7 @@ def test_one_call_over_two_bodies_is_each_body_against_the_other_alone(detector)
             np.testing.assert_array_equal(got[rows], want[rows], field)
         np.testing.assert_allclose(np.asarray(both.gap)[rows], np.asarray(alone.gap)[rows])
     # Without labels, the other body's nodes see their own outline: false contact.
-    unlabelled = detect(x, surface, radius=0.3, slave_node=slave_node)
+    unlabelled = detect(x, surface, radius=0.3, pairs=Pairs(slave_node))
     assert int(unlabelled.active.sum()) > int(both.active.sum())
 
 
@@ -119,12 +123,12 @@ def test_swept_over_two_bodies_and_self_contact_match_the_oracle():
     ):
         expected = oracle_crossing(x_prev, x, nodes, segments, body=body, **keywords)
         for detect in (swept, bucket_swept):
-            crossing = detect(x_prev, x, surface, **keywords)
+            crossing = detect(x_prev, x, surface, pairs=Pairs(**keywords))
             np.testing.assert_array_equal(np.asarray(crossing.segment), expected.segment)
             np.testing.assert_allclose(crossing.t, expected.t, atol=local_atol(FLOAT, 40.0))
         assert expected.crossed.any()
     # A node's path ends on its own segments: never reported as crossing them.
-    crossing = swept(x_prev, x, surface, slave_node=slave_node, self_contact=True)
+    crossing = swept(x_prev, x, surface, pairs=Pairs(slave_node, self_contact=True))
     own = np.asarray(segments)[np.maximum(np.asarray(crossing.segment), 0)]
     assert not np.any(crossing.crossed & np.any(own == slave_node[:, None], axis=-1))
     plain = swept(x_prev, x, surface)  # without the rule, paths meet their own segments
@@ -135,7 +139,7 @@ def test_swept_over_two_bodies_and_self_contact_match_the_oracle():
 def test_radius_per_slave_matches_the_oracle_in_every_detector():
     x, surface, slave_node, slave_body = two_rings(sizes=(30, 26))
     radius = np.where(np.arange(len(x)) % 3 == 0, 0.35, 0.08).astype(np.asarray(x).dtype)
-    keywords = {"slave_node": slave_node, "slave_body": slave_body}
+    keywords = {"pairs": Pairs(slave_node, slave_body)}
     expected = oracle_of(x, surface, radius, **keywords)
     for detect in ONE_CALL.values():
         contact = detect(x, surface, radius=jnp.asarray(radius), **keywords)
@@ -147,7 +151,7 @@ def test_radius_per_slave_matches_the_oracle_in_every_detector():
 
 def test_radius_per_slave_in_a_search_is_traced_and_past_the_bound_overflows():
     x, surface, slave_node, slave_body = two_rings(sizes=(30, 26))
-    keywords = {"slave_node": slave_node, "slave_body": slave_body}
+    keywords = {"pairs": Pairs(slave_node, slave_body)}
     search = Search(radius=0.35, skin=0.05, method="binned", compact=True)
     state = search.allocate(x, surface, **keywords)
     traces = []
@@ -230,9 +234,8 @@ def test_gradients_with_both_bodies_deformable_are_finite_and_match_finite_diffe
     def energy(nodes):
         both = Surface(nodes, segments, body=body)
         contact = all_to_all(
-            nodes, both, radius=0.3, slave_node=slave_node, slave_body=slave_body,
-            self_contact=self_contact,
-        )  # fmt: skip
+            nodes, both, radius=0.3, pairs=Pairs(slave_node, slave_body, self_contact)
+        )
         return jnp.sum(jnp.where(contact.active, contact.gap, 0) ** 2)
 
     grad = jax.grad(energy)(x)
@@ -248,7 +251,7 @@ def test_pair_keywords_under_vmap_and_lax_scan_in_a_search():
     """A batch of two scenes (shared slave nodes and bodies) searched with one
     allocation under vmap, and a scan of steps pressing the bodies together."""
     x, surface, slave_node, slave_body = two_rings()
-    keywords = {"slave_node": slave_node, "slave_body": slave_body}
+    keywords = {"pairs": Pairs(slave_node, slave_body)}
     shifts = jnp.asarray(np.linspace(0.0, 0.1, 4), x.dtype)
     moving = jnp.stack([-jnp.asarray(slave_body == 1, x.dtype), jnp.zeros(x.shape[0], x.dtype)], -1)
 
@@ -288,7 +291,7 @@ def test_pair_keywords_under_vmap_and_lax_scan_in_a_search():
 def test_self_contact_needs_slave_node_and_bad_pair_inputs_are_named():
     x, surface, slave_node, slave_body = two_rings()
     cases = [
-        ({"self_contact": True}, "self_contact=True needs slave_node"),
+        ({"self_contact": True}, "self_contact=True) needs slave_node"),
         ({"slave_node": slave_node[:-1]}, "slave_node must have shape (N,) = (44,)"),
         ({"slave_node": slave_node.astype(np.float32)}, "an integer dtype"),
         ({"slave_body": slave_body[:, None]}, "slave_body must have shape"),
@@ -298,9 +301,14 @@ def test_self_contact_needs_slave_node_and_bad_pair_inputs_are_named():
         ({"self_contact": 1, "slave_node": slave_node}, "self_contact must be a bool"),
     ]
     for keywords, message in cases:
+        rule = {
+            k: keywords.pop(k)
+            for k in ("slave_node", "slave_body", "self_contact")
+            if k in keywords
+        }
         keywords = {"radius": 0.1, **keywords}
         with pytest.raises(ValueError, match=message.replace("(", r"\(").replace(")", r"\)")):
-            all_to_all(x, surface, **keywords)
+            all_to_all(x, surface, pairs=Pairs(**rule), **keywords)
     bad_body = surface._replace(body=jnp.zeros(3, jnp.int32))
     with pytest.raises(ValueError, match=r"surface.body must have shape \(M,\) = \(44,\)"):
         bucket_sort(x, bad_body, radius=0.1)
@@ -308,14 +316,14 @@ def test_self_contact_needs_slave_node_and_bad_pair_inputs_are_named():
     node = slave_node.copy()
     node[0] = 1000
     mask = np.arange(44) > 0
-    all_to_all(x, surface, radius=0.1, mask=mask, slave_node=node)
+    all_to_all(x, surface, radius=0.1, mask=mask, pairs=Pairs(node))
     # Under jit an out-of-range node is ignored, as an out-of-range segment index is.
-    traced = jax.jit(lambda n: all_to_all(x, surface, radius=0.1, slave_node=n))(node)
-    alone = all_to_all(x, surface, radius=0.1, slave_node=np.where(node < 44, node, -1))
+    traced = jax.jit(lambda n: all_to_all(x, surface, radius=0.1, pairs=Pairs(n)))(node)
+    alone = all_to_all(x, surface, radius=0.1, pairs=Pairs(np.where(node < 44, node, -1)))
     np.testing.assert_array_equal(traced.segment, alone.segment)
     mesh = jax.make_mesh((1,), ("slaves",))
-    with pytest.raises(ValueError, match="sharded.* splits the slave arrays only: slave_node"):
-        jaxcontact.sharded(all_to_all, mesh)(x, surface, radius=0.1, slave_node=slave_node)
+    with pytest.raises(ValueError, match="sharded.* splits the slave arrays only: pairs"):
+        jaxcontact.sharded(all_to_all, mesh)(x, surface, radius=0.1, pairs=Pairs(slave_node))
 
 
 def test_the_version_is_the_package_metadata():
@@ -356,10 +364,11 @@ def three_outlines():
 
 def _search_self(x, surface, slave_node, radius):
     bound = float(jnp.max(radius))
-    search = Search(radius=bound, skin=0.25 * bound, self_contact=True, compact=True)
-    state = search.allocate(x, surface, slave_node=slave_node)
+    search = Search(radius=bound, skin=0.25 * bound, compact=True)
+    rule = Pairs(slave_node, self_contact=True)
+    state = search.allocate(x, surface, pairs=rule)
     entries, state = jax.jit(
-        lambda state, x, r: search.closest(state, x, surface, radius=r, slave_node=slave_node)
+        lambda state, x, r: search.closest(state, x, surface, radius=r, pairs=rule)
     )(state, x, radius)
     assert not bool(state.overflow)
     return entries.to_contact(x.shape[0])
@@ -367,10 +376,10 @@ def _search_self(x, surface, slave_node, radius):
 
 SELF_CONTACT = {
     "all_to_all": lambda *scene: all_to_all(
-        scene[0], scene[1], radius=scene[3], slave_node=scene[2], self_contact=True
+        scene[0], scene[1], radius=scene[3], pairs=Pairs(scene[2], self_contact=True)
     ),
     "bucket_sort binned": lambda *scene: bucket_sort(
-        scene[0], scene[1], radius=scene[3], slave_node=scene[2], self_contact=True
+        scene[0], scene[1], radius=scene[3], pairs=Pairs(scene[2], self_contact=True)
     ),
     "Search compact": _search_self,
 }
@@ -400,5 +409,5 @@ def test_self_contact_reports_exactly_the_pressed_nodes_and_nothing_at_corners(d
     assert np.all(facing[fold][pressed[fold]] < 0)
     if detector == "all_to_all":
         # Without the neighbourhood rule the corners report false contact.
-        plain = all_to_all(x, surface, radius=radius, slave_node=slave_node)
+        plain = all_to_all(x, surface, radius=radius, pairs=Pairs(slave_node))
         assert np.asarray(plain.active)[corners].sum() > 0

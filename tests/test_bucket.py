@@ -19,16 +19,18 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from jaxcontact import (
+    Pairs,
     Search,
     Sizes,
     Surface,
-    _bucket,
     all_to_all,
     bucket_sort,
     bucket_swept,
     swept,
 )
-from jaxcontact._pipeline.sizes import CHUNK_ROWS, largest, measure
+from jaxcontact._pipeline import candidates as _candidates
+from jaxcontact._pipeline.sizes import largest, measure
+from jaxcontact._types import CHUNK_ROWS
 from jaxcontact.scenes import curling_chip, cutting_scene, paper_scene, rough_die_scene
 from tests.helpers import (
     FLOAT,
@@ -45,7 +47,7 @@ X64_OFF = pytest.mark.x64_off
 jit_sized_sort = jax.jit(sized_bucket_sort, static_argnames="sizes")
 jit_sized_swept = jax.jit(sized_bucket_swept, static_argnames="sizes")
 jit_all_to_all = jax.jit(all_to_all)
-jit_expired = jax.jit(_bucket.expired)  # one program, not one per operation
+jit_expired = jax.jit(_candidates.expired)  # one program, not one per operation
 jit_swept = jax.jit(swept)
 
 # ``search.closest`` jitted once for the module (the search is static), with
@@ -339,9 +341,9 @@ def test_an_outline_in_a_wide_box_hashes_its_cells_and_finds_what_all_to_all_doe
     assert sizes.use_cells and sizes.buckets > 0
     assert sizes.cell_size < 8 * scene.radius
     assert sizes.buckets < sizes.grid_shape[0] * sizes.grid_shape[1]
-    pair = {"slave_node": scene.slave_node, "self_contact": True}
-    binned = sized_bucket_sort(scene.x, scene.surface, radius=scene.radius, sizes=sizes, **pair)
-    dense = all_to_all(scene.x, scene.surface, radius=scene.radius, **pair)
+    rule = Pairs(scene.slave_node, self_contact=True)
+    binned = sized_bucket_sort(scene.x, scene.surface, radius=scene.radius, sizes=sizes, pairs=rule)
+    dense = all_to_all(scene.x, scene.surface, radius=scene.radius, pairs=rule)
     assert not bool(binned.overflow)
     assert_same_contact(binned, dense, scene.radius)
     assert np.asarray(dense.active).sum() > 0

@@ -6,7 +6,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from jaxcontact import _cells, _sort
+from jaxcontact._pipeline import cells as _cells
+from jaxcontact._pipeline import sort as _sort
 from jaxcontact._pipeline.broad import Box
 from jaxcontact._pipeline.cells import Grid, bin_segments
 from jaxcontact._pipeline.sort import stable_order

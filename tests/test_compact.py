@@ -25,7 +25,8 @@ from jaxcontact import (
     sharded,
     swept,
 )
-from jaxcontact._bucket import contact_jit
+from jaxcontact._pipeline import driver
+from jaxcontact._query.closest import CLOSEST
 from jaxcontact.scenes import cutting_scene, rough_die_scene
 from tests.helpers import (
     FLOAT,
@@ -127,7 +128,7 @@ def test_too_few_entries_overflow_and_keep_the_first_contacts():
     assert state.sizes.contact_capacity >= int(dense.found.sum()) > 3
     small = dataclasses.replace(state.sizes, contact_capacity=3)
     radius = jnp.asarray(scene.radius, scene.x.dtype)
-    entries = contact_jit(scene.x, scene.surface, radius, None, sizes=small)
+    entries = driver.sized_jit(CLOSEST, (scene.x,), scene.surface, radius, None, sizes=small)
     assert bool(entries.overflow)
     rows = np.flatnonzero(np.asarray(dense.found))[:3]
     np.testing.assert_array_equal(entries.node, rows)
@@ -171,7 +172,7 @@ def test_compact_misuse_raises_a_clear_error():
     with pytest.raises(ValueError, match="compact=True is not supported"):
         sharded(bucket_sort, mesh)(scene.x, scene.surface, radius=RADIUS, compact=True)
     dense_state = Search(radius=RADIUS).allocate(scene.x, scene.surface)
-    with pytest.raises(ValueError, match="allocated by a dense search; this one is compact"):
+    with pytest.raises(ValueError, match="allocated by a N-row search; this one is compact"):
         Search(radius=RADIUS, compact=True).closest(dense_state, scene.x, scene.surface)
 
 
@@ -294,7 +295,7 @@ def test_search_compact_swept_measures_its_capacity_and_overflows_when_outgrown(
     # takes this search's form (the capacity measured, or none).
     dense_search = Search(radius=scene.radius, method="binned")
     dense_state = dense_search.allocate(x, scene.surface, x_prev=scene.x_prev, mask=mask)
-    with pytest.raises(ValueError, match="allocated by a dense search; this one is compact"):
+    with pytest.raises(ValueError, match="allocated by a N-row search; this one is compact"):
         search.swept(dense_state, scene.x_prev, x, scene.surface)
     grown = search.allocate(x, scene.surface, x_prev=scene.x_prev, mask=mask, at_least=dense_state)
     assert grown.path_sizes.contact_capacity == capacity

@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 from jax.test_util import check_grads
 
-from jaxcontact import ContactList, Search, Surface, all_to_all, bucket_sort, track
+from jaxcontact import ContactList, Pairs, Search, Surface, all_to_all, bucket_sort, track
 from jaxcontact.forces import Forces, Friction, coulomb, penalty
 from tests.helpers import FLOAT
 
@@ -128,7 +128,7 @@ def test_friction_never_adds_energy_over_a_random_run():
     rng = np.random.default_rng(1)
     dtype = FLOAT
     k_n, k_t, mu = 100.0, 50.0, 0.4
-    search = Search(radius=0.2, method="dense", track=True)
+    search = Search(radius=0.2, method="unbinned", track=True)
     along = rng.uniform(0.3, 2.7, 6)
     x = np.stack([along, 0.1 * np.sin(3 * along) - 0.01], -1)
     state = search.allocate(jnp.asarray(x, dtype), wavy_master(dtype, 0.0))
@@ -188,7 +188,7 @@ def two_blocks(dtype, depth=0.01):
 def test_two_pass_counts_each_contact_once_and_balances():
     depth, k = 0.01, 100.0
     surface, slave_node, slave_body = two_blocks(FLOAT, depth)
-    keywords = dict(radius=0.05, slave_node=slave_node, slave_body=slave_body)
+    keywords = dict(radius=0.05, pairs=Pairs(slave_node, slave_body))
     contact = all_to_all(surface.nodes, surface, **keywords)
     assert bool(contact.active.all())  # both passes find every node
     forces = penalty(contact, surface, k, two_pass=True)
@@ -314,7 +314,7 @@ def test_compact_and_dense_searches_give_the_same_frictional_forces_under_vmap()
         return jax.lax.scan(step, (state, Friction.zeros(6, dtype), x), moves)[1]
 
     searches = [
-        Search(radius=0.2, method="dense", compact=compact, track=True, normals="smooth")
+        Search(radius=0.2, method="unbinned", compact=compact, track=True, normals="smooth")
         for compact in (False, True)
     ]
     states = [search.allocate(x0, floor) for search in searches]

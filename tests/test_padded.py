@@ -9,9 +9,8 @@ import numpy as np
 import pytest
 
 from jaxcontact import Surface, all_to_all, bucket_sort, bucket_swept, swept
-from jaxcontact._bucket import contact_jit, crossing_jit
-from jaxcontact._dense import _all_to_all, _swept
-from jaxcontact._pipeline.padding import size_class
+from jaxcontact._pipeline import driver
+from jaxcontact._pipeline.sizes import size_class
 
 NODES = np.array([[3.0, 0.0], [2.0, 0.1], [1.0, 0.0], [0.0, 0.05]])
 SEGMENTS = np.array([[0, 1], [1, 2], [2, 3]])
@@ -26,10 +25,10 @@ def _crossing(detect):
 
 
 DETECTORS = {
-    "all_to_all": (_closest(all_to_all), _all_to_all),
-    "bucket_sort": (_closest(bucket_sort), contact_jit),
-    "swept": (_crossing(swept), _swept),
-    "bucket_swept": (_crossing(bucket_swept), crossing_jit),
+    "all_to_all": (_closest(all_to_all), driver.exhaustive),
+    "bucket_sort": (_closest(bucket_sort), driver.sized_jit),
+    "swept": (_crossing(swept), driver.exhaustive),
+    "bucket_swept": (_crossing(bucket_swept), driver.sized_jit),
 }
 
 
@@ -89,14 +88,14 @@ def test_traced_calls_are_not_padded():
 def test_plain_bucket_calls_keep_their_sizes_and_measure_again_only_past_them(query, monkeypatch):
     # The one-call forms keep the sizes they measured per padded shape (as a
     # Search does) and measure again only when a search at them overflows.
-    import jaxcontact._bucket as bucket
+    import jaxcontact._detect as bucket
 
     measured = []
     real_measure = bucket.measure
     monkeypatch.setattr(
         bucket, "measure", lambda *a, **k: measured.append(1) or real_measure(*a, **k)
     )
-    bucket.forget_sizes()
+    bucket.clear_sizes()
     rng = np.random.default_rng(1)
     near = rng.uniform([0.0, -0.25], [3.0, 0.25], (256, 2))
     one_block = near.copy()
@@ -114,7 +113,7 @@ def test_plain_bucket_calls_keep_their_sizes_and_measure_again_only_past_them(qu
         np.testing.assert_array_equal(got.segment, want.segment)
         np.testing.assert_array_equal(getattr(got, flag), getattr(want, flag))
         assert getattr(want, flag).any()
-    bucket.forget_sizes()
+    bucket.clear_sizes()
 
 
 def test_checked_host_inputs_stay_numpy_in_the_dtype_jax_computes_in():

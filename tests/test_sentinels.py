@@ -26,14 +26,13 @@ from jaxcontact import (
     all_to_all,
     bucket_sort,
     bucket_swept,
-    contact_forces,
     sharded,
     swept,
     validate,
 )
-from jaxcontact._bucket import Candidates
+from jaxcontact._pipeline.candidates import Candidates
 from jaxcontact._pipeline.sizes import measure
-from tests.helpers import FLOAT, local_atol
+from tests.helpers import FLOAT, local_atol, penalty_total
 
 RADIUS = 0.25
 # A floor listed right to left (normals up) with two corners, and node 4,
@@ -177,10 +176,10 @@ def test_float32_masked_sentinel_segment_changes_no_real_row():
 
 @pytest.mark.parametrize("where", WHERE)
 @pytest.mark.parametrize("sentinel", list(SENTINELS))
-def test_contact_forces_ignore_the_padding(sentinel, where):
+def test_penalty_ignores_the_padding(sentinel, where):
     surface, _ = padded(SENTINELS[sentinel], where)
-    got = contact_forces(detect("all_to_all", "plain", surface), 10.0)
-    want = contact_forces(reference("all_to_all"), 10.0)
+    got = penalty_total(detect("all_to_all", "plain", surface), surface, 10.0)
+    want = penalty_total(reference("all_to_all"), unpadded(FLOAT), 10.0)
     for value, expected in zip(got, want, strict=True):
         np.testing.assert_array_equal(value, expected)
 

@@ -14,11 +14,11 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxcontact import _outline
+from jaxcontact._pipeline import outline as _outline
 from jaxcontact._pipeline.geometry import edge, squared_distance
-from jaxcontact._pipeline.inputs import resolve_segments
 from jaxcontact._pipeline.lowest import lowest_score
 from jaxcontact._pipeline.narrow import _lowest_in_plane
+from jaxcontact._pipeline.segments import resolve_segments
 from jaxcontact._types import Surface
 from tests import helpers
 

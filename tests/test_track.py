@@ -149,7 +149,7 @@ def tracked_run(search: Search, xs, surfaces):
     "dtype, method, compact",
     [
         (jnp.float64, "exhaustive", False),
-        (jnp.float64, "dense", True),
+        (jnp.float64, "unbinned", True),
         (jnp.float32, "binned", False),
     ],
 )
@@ -196,7 +196,7 @@ def test_rows_not_found_hold_zeros_and_batches_map():
     xs, surfaces, _, _ = scene(jnp.float32)
     one = Surface(surfaces.nodes[0], surfaces.segments, surfaces.mask)
     x_far = xs[0].at[0].add(10.0)  # slave 0 leaves contact
-    search = Search(radius=RADIUS, method="dense", track=True)
+    search = Search(radius=RADIUS, method="unbinned", track=True)
     batch = jnp.stack([xs[0], xs[0]])
     state = search.allocate(batch, one)
     assert state.history.found.shape == batch.shape[:2]
@@ -215,11 +215,11 @@ def test_rows_not_found_hold_zeros_and_batches_map():
 def test_a_regrown_state_keeps_its_history_and_bad_states_are_refused():
     xs, surfaces, slips, _ = scene(jnp.float32)
     one = lambda t: Surface(surfaces.nodes[t], surfaces.segments, surfaces.mask)  # noqa: E731
-    search = Search(radius=RADIUS, method="dense", track=True)
+    search = Search(radius=RADIUS, method="unbinned", track=True)
     state = search.allocate(xs[0], one(0))
     _, state, _ = search.closest(state, xs[0], one(0))
     # Reallocated at larger sizes (as resumable_scan's grow does): the history stays.
-    grown = Search(radius=RADIUS, method="dense", track=True, slack=3.0).allocate(
+    grown = Search(radius=RADIUS, method="unbinned", track=True, slack=3.0).allocate(
         xs[1], one(1), at_least=state
     )
     _, _, slip = search.closest(grown, xs[1], one(1))
@@ -228,7 +228,9 @@ def test_a_regrown_state_keeps_its_history_and_bad_states_are_refused():
     with pytest.raises(ValueError, match="slip history has shape"):
         search.closest(state, xs[1][:5], one(1))
     with pytest.raises(ValueError, match="no slip history"):
-        search.closest(Search(radius=RADIUS, method="dense").allocate(xs[0], one(0)), xs[0], one(0))
+        search.closest(
+            Search(radius=RADIUS, method="unbinned").allocate(xs[0], one(0)), xs[0], one(0)
+        )
 
 
 @pytest.mark.parametrize("found_rows", ["few", "many"])

@@ -227,7 +227,9 @@ def check(pairs, x, surface: Surface, mask, stacklevel: int = 3, **keywords) -> 
     ``surface`` and the slave ``mask``; the replaced keywords (``keywords``:
     ``slave_node``, ``slave_body``, ``self_contact``) folded in with a
     ``DeprecationWarning``."""
-    given = {name: value for name, value in keywords.items() if value not in (None, False)}
+    given = {
+        name: value for name, value in keywords.items() if value is not None and value is not False
+    }
     unknown = set(keywords) - set(PAIR_KEYWORDS)
     if unknown:
         raise TypeError(f"unexpected keyword arguments {sorted(unknown)}")

@@ -23,6 +23,8 @@ VECTOR_FIELDS = ("point", "normal")
 
 def fill_of(name: str):
     """The value a field holds where nothing was found."""
+    if name in FLAG_FIELDS:
+        return False
     return -1 if name in INDEX_FIELDS else 0
 
 

@@ -49,7 +49,7 @@ The model, and why:
   ``shear_factor`` times the steel's shear flow stress ``A / sqrt 3`` over a
   node's share of the face (Zorev, 1963; Shirakashi and Usui, 1973):
   without the cap, the sticking zone shears the chip's first row of elements
-  into slivers. ``Search(self_contact=True)`` over the pool of outline
+  into slivers. ``Pairs(self_contact=True)`` over the pool of outline
   segments finds the chip against the machined surface, the workpiece and
   itself; ``forces.penalty`` acts on both sides, frictionless. Near the
   crack tip the outline is open, and a node lies within the radius of the
@@ -524,18 +524,20 @@ def setup(cut: Cutting) -> tuple[Model, State]:
     tool_search = jaxcontact.Search(
         radius=cut.radius, method="exhaustive", track=True, normals="smooth"
     )
-    own_search = jaxcontact.Search(radius=cut.radius, method="exhaustive", self_contact=True)
+    own_search = jaxcontact.Search(radius=cut.radius, method="exhaustive")
     start_x = float(mesh.quads.nodes[:, 0].max()) + cut.edge_radius + 0.5 * cut.element
     model = Model(cut, mesh, tool_search, own_search, start_x)
     released = jnp.zeros(mesh.base_line.shape, bool).at[-2:].set(True)  # the chamfer
     x = mesh.quads.nodes
     slaves = x[mesh.slaves]
-    tool = tool_search.allocate(x, tool_surface(cut, start_x, 0.0), slave_body=mesh.side)
+    tool = tool_search.allocate(
+        x, tool_surface(cut, start_x, 0.0), pairs=jaxcontact.Pairs(slave_body=mesh.side)
+    )
     own = own_search.allocate(
         slaves,
         own_surface(mesh, x, released, jnp.ones(mesh.quads.quads.shape[0], bool)),
         pool=mesh.pair[:, 0] >= 0,
-        slave_node=mesh.slaves,
+        pairs=jaxcontact.Pairs(slave_node=mesh.slaves, self_contact=True),
     )
     body = explicit.at_rest(mesh.quads, cut.material)
     friction = Friction.zeros(x.shape[0], x.dtype)
@@ -551,11 +553,15 @@ def _contacts(model: Model, tool_state, own_state, x, lowest_x, rake, released, 
     mesh = model.mesh
     tool = tool_surface(model.cut, lowest_x, rake)
     on_tool, tool_state, slip = model.tool_search.closest(
-        tool_state, x, tool, mask=kept, slave_body=mesh.side
+        tool_state, x, tool, mask=kept, pairs=jaxcontact.Pairs(slave_body=mesh.side)
     )
     own = own_surface(mesh, x, released, alive)
     on_own, own_state = model.own_search.closest(
-        own_state, x[mesh.slaves], own, mask=kept[mesh.slaves], slave_node=mesh.slaves
+        own_state,
+        x[mesh.slaves],
+        own,
+        mask=kept[mesh.slaves],
+        pairs=jaxcontact.Pairs(slave_node=mesh.slaves, self_contact=True),
     )
     return tool, on_tool, tool_state, slip, own, on_own, own_state
 

@@ -98,7 +98,7 @@ def _rebuilt_mask(mask):
 def _detect(groups, x_prev, x, surface, mask, *, jit: bool) -> dict:
     """The detectors of ``groups`` on the same inputs: a dict of results."""
     binned = Search(radius=RADIUS, method="binned")
-    skin = Search(radius=RADIUS, skin=SKIN, method="dense")
+    skin = Search(radius=RADIUS, skin=SKIN, method="unbinned")
     # Host: sizes measured from the data.
     found, states = {}, {}
     if "bucket_sort" in groups:

@@ -14,17 +14,18 @@ from jax.sharding import NamedSharding
 from jax.sharding import PartitionSpec as P
 
 from jaxcontact import (
-    _bucket,
     all_to_all,
     bucket_sort,
     bucket_swept,
-    contact_forces,
     sharded,
     swept,
 )
-from jaxcontact._pipeline.sizes import CELLS_ABOVE, measure
+from jaxcontact._pipeline import driver
+from jaxcontact._pipeline.sizes import measure
+from jaxcontact._query.closest import CLOSEST
+from jaxcontact._types import CELLS_ABOVE
 from jaxcontact.scenes import cutting_scene, rough_die_scene
-from tests.helpers import assert_same_contact, assert_same_crossing
+from tests.helpers import assert_same_contact, assert_same_crossing, penalty_total
 
 DEVICES = 4
 RADIUS = 0.1
@@ -99,7 +100,7 @@ def test_overflow_on_one_device_is_overflow_of_the_whole(mesh):
     assert clear.block_capacity == 1
 
     def starved(x, surface, *, radius, mask):
-        return _bucket.contact_jit(x, surface, radius, mask, sizes=clear)
+        return driver.sized_jit(CLOSEST, (x,), surface, radius, mask, sizes=clear)
 
     radius = jnp.asarray(RADIUS, scene.x.dtype)
     result = jax.jit(sharded(starved, mesh))(scene.x, scene.surface, radius=radius)
@@ -112,12 +113,14 @@ def test_tool_force_is_a_collective_sum_equal_to_one_device(mesh):
     # The contact test's mask and shapes: its sharded program, which CI's persistent
     # compilation cache loads instead of compiling it again.
     mask = jnp.asarray(np.arange(scene.x.shape[0]) % 7 != 3)
-    one = contact_forces(all_to_all(scene.x, scene.surface, radius=RADIUS, mask=mask), 1e3)[1]
+    one = penalty_total(
+        all_to_all(scene.x, scene.surface, radius=RADIUS, mask=mask), scene.surface, 1e3
+    )[1]
 
     # Explicitly: inside shard_map, the reaction is a psum over the devices.
     def local(x, surface):
         contact = all_to_all(x, surface, radius=RADIUS)
-        return contact_forces(contact, 1e3, axis_name="slaves")
+        return penalty_total(contact, surface, 1e3, axis_name="slaves")
 
     explicit = jax.jit(
         jax.shard_map(
@@ -128,12 +131,14 @@ def test_tool_force_is_a_collective_sum_equal_to_one_device(mesh):
     # (shard_map itself needs rows divisible by the device count; sharded pads.)
     rows = scene.x.shape[0] // DEVICES * DEVICES
     x = jax.device_put(scene.x[:rows], NamedSharding(mesh, P("slaves")))
-    part = contact_forces(all_to_all(scene.x[:rows], scene.surface, radius=RADIUS), 1e3)[1]
+    part = penalty_total(
+        all_to_all(scene.x[:rows], scene.surface, radius=RADIUS), scene.surface, 1e3
+    )[1]
     np.testing.assert_allclose(explicit(x, scene.surface)[1], part, rtol=1e-12)
 
     # Implicitly: jit over a sharded result; XLA's partitioner adds the all-reduce.
     contact = jax.jit(sharded(all_to_all, mesh))(scene.x, scene.surface, radius=RADIUS, mask=mask)
-    total = jax.jit(lambda c: contact_forces(c, 1e3)[1])(contact)
+    total = jax.jit(lambda c: penalty_total(c, scene.surface, 1e3)[1])(contact)
     np.testing.assert_allclose(total, one, rtol=1e-12)
 
 
