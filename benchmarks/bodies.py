@@ -3,7 +3,7 @@
 Three parts, float32, every step jitted and compiled ahead of the runs (its
 compile time reported apart), two warm-up runs, then the median and the
 10th-90th percentile of ``--repeats`` rounds, the methods of one part run
-round-robin in this one process (``jaxcontact.bench.timing.time_interleaved``),
+round-robin in this one process (``benchmarks.harness.timing.time_interleaved``),
 every call ended by ``block_until_ready``:
 
 1. **Self-contact** of the curling chip (``scenes.curling_chip``: one closed
@@ -43,16 +43,19 @@ every call ended by ``block_until_ready``:
 from __future__ import annotations
 
 import argparse
+import pathlib
 import sys
 import time
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))  # the repo root: benchmarks.*
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
+from benchmarks.harness._run import machine
+from benchmarks.harness.timing import time_interleaved
 from jaxcontact import Contact, Search, Surface, all_to_all
-from jaxcontact.bench._run import machine
-from jaxcontact.bench.timing import time_interleaved
 from jaxcontact.scenes import curling_chip, cutting_scene, two_blocks
 
 DENSE_PAIRS = 2e8  # all_to_all runs at or below this many pairs

@@ -30,15 +30,17 @@ from __future__ import annotations
 
 import argparse
 import os
+import pathlib
 import sys
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))  # the repo root: benchmarks.*
 
 import jax
 import numpy as np
 
+from benchmarks.harness._run import machine
+from benchmarks.harness.internals import _all_to_all, _swept, contact_jit, crossing_jit
 from jaxcontact import all_to_all, bucket_sort, bucket_swept, swept
-from jaxcontact._bucket import contact_jit, crossing_jit
-from jaxcontact._dense import _all_to_all, _swept
-from jaxcontact.bench._run import machine
 from jaxcontact.scenes import cutting_scene, rough_die_scene
 
 
