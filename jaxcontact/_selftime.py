@@ -46,7 +46,7 @@ def scenes(quick: bool) -> dict:
         return {
             "paper, n=60": paper_scene(60),
             "cutting": cutting_scene(5_000, 18.0, x_tip_prev=18.2),
-            "rough die": rough_die_scene(20_000, 2_000),
+            "rough die": rough_die_scene(10_000, 1_000),
         }
     return {
         "paper, n=250": paper_scene(250),
