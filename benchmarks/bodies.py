@@ -3,7 +3,7 @@
 Three parts, float32, every step jitted and compiled ahead of the runs (its
 compile time reported apart), two warm-up runs, then the median and the
 10th-90th percentile of ``--repeats`` rounds, the methods of one part run
-round-robin in this one process (``jaxcontact.bench.timing.time_interleaved``),
+round-robin in this one process (``benchmarks.harness.timing.time_interleaved``),
 every call ended by ``block_until_ready``:
 
 1. **Self-contact** of the curling chip (``scenes.curling_chip``: one closed
@@ -13,13 +13,11 @@ every call ended by ``block_until_ready``:
    nodes and radius without the pair rule (every node then finds its own
    segments). References: ``all_to_all(..., self_contact=True)`` (and the
    plain ``all_to_all``, the rule's cost there) where N * M <= 2e8 pairs,
-   and a float64 NumPy brute force of the same rule written here
-   (``brute_force``: own node, arc-length window of ``4 r`` along the
-   outline, ``docs/contract.md``) on a random sample of 2,000 slaves, its
-   time per slave extrapolated to N. Checked: the active nodes equal the
-   scene's analytic ``pressed`` set; the search's answer equals
+   and the same in float64 on a random sample of 2,000 slaves
+   (``sampled_reference``), its time per slave extrapolated to N. Checked:
+   the active nodes equal the scene's analytic ``pressed`` set; the search's answer equals
    ``all_to_all``'s on every row (segment, found, vertex; gaps to 1e-5) and
-   the brute force's on the sample plus every row the search finds
+   the float64 sample's on the sample plus every row the search finds
    (segment, found; gaps to 1e-5).
 2. **Two bodies in one call**: ``scenes.two_blocks(n)``, the upper block
    pressed ``2 / n`` into the lower one (radius ``4 / n``, two node
@@ -43,166 +41,48 @@ every call ended by ``block_until_ready``:
 from __future__ import annotations
 
 import argparse
+import pathlib
 import sys
 import time
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))  # the repo root: benchmarks.*
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
+from benchmarks.harness._run import machine
+from benchmarks.harness.timing import time_interleaved
 from jaxcontact import Contact, Search, Surface, all_to_all
-from jaxcontact.bench._run import machine
-from jaxcontact.bench.timing import time_interleaved
 from jaxcontact.scenes import curling_chip, cutting_scene, two_blocks
 
 DENSE_PAIRS = 2e8  # all_to_all runs at or below this many pairs
 GAP_TOLERANCE = 1e-5
-REACH = 4.0  # the self-contact window in radii (jaxcontact._pairs.SELF_CONTACT_REACH)
 
 
-# -- a float64 NumPy brute force of the pair rule, written from the contract ----
+# -- the reference on a sample: the library's own pair rule in float64 ------------
 
 
-def outline_arcs(nodes: np.ndarray, segments: np.ndarray):
-    """Chains of segments joined end to start, walked on the host.
-
-    Returns ``(chain, order, closed)``, per segment: its chain (the index of
-    the segment the walk began at: an open chain's first, a loop's lowest),
-    its position along the chain from there, and whether the chain is a
-    closed loop. Segment ``j`` follows ``k`` when it starts at ``k``'s end
-    node (the lowest such ``j``). Topology only: ``arc_lengths`` turns it
-    into arc coordinates from the current node positions.
+def sampled_reference(x, surface, rows, radius, *, slave_node):
+    """Slaves ``rows`` searched by ``all_to_all(..., slave_node=, self_contact=True)`` in
+    float64 (the library's pair rule, checked against the exact oracle by the tests), on
+    those rows alone: ``(segment, found, gap, distance)``, ``distance`` inf where not found.
     """
-    num_segments, num_nodes = len(segments), len(nodes)
-    first_start = np.full(num_nodes, num_segments, np.int64)
-    np.minimum.at(first_start, segments[:, 0], np.arange(num_segments))
-    successor = first_start[segments[:, 1]]
-    successor[successor == num_segments] = -1
-    has_predecessor = np.zeros(num_segments, bool)
-    has_predecessor[successor[successor >= 0]] = True
-    chain = np.full(num_segments, -1, np.int64)
-    order = np.zeros(num_segments, np.int64)  # position along its chain
-    closed = np.zeros(num_segments, bool)
-    starts = [*np.flatnonzero(~has_predecessor), *range(num_segments)]  # open chains first
-    for head in starts:
-        if chain[head] >= 0:
-            continue
-        k, position = head, 0
-        while k >= 0 and chain[k] < 0:
-            chain[k], order[k] = head, position
-            k, position = successor[k], position + 1
-        closed[chain == head] = k == head
-    return chain, order, closed
-
-
-def arc_lengths(nodes: np.ndarray, segments: np.ndarray, topology):
-    """``(low, high, loop, node_chain, node_arc)`` of the walked chains, in float64."""
-    chain, order, closed = topology
-    length = np.linalg.norm(nodes[segments[:, 1]] - nodes[segments[:, 0]], axis=-1)
-    walk = np.lexsort((order, chain))  # chain by chain, each from its head
-    along = length[walk]
-    before = np.cumsum(along) - along  # arc length before each, from the walk's start
-    first = np.r_[True, chain[walk][1:] != chain[walk][:-1]]
-    head = np.maximum.accumulate(np.where(first, np.arange(len(walk)), 0))
-    low = np.empty(len(segments))
-    low[walk] = before - before[head]
-    total = np.zeros(len(segments))
-    np.add.at(total, chain, length)  # summed at each chain's head index
-    loop = np.where(closed, total[chain], np.inf)
-    node_chain = np.full(len(nodes), -1, np.int64)
-    node_arc = np.zeros(len(nodes))
-    # A node's coordinate: the start of the segment leaving it, or the end of the one entering.
-    node_chain[segments[:, 1]], node_arc[segments[:, 1]] = chain, low + length
-    node_chain[segments[:, 0]], node_arc[segments[:, 0]] = chain, low
-    return low, low + length, loop, node_chain, node_arc
-
-
-def brute_force(
-    x,
-    nodes,
-    segments,
-    rows,
-    radius,
-    *,
-    slave_node=None,
-    slave_body=None,
-    body=None,
-    self_contact=False,
-    topology=None,
-    chunk=64,
-):
-    """Float64 closest allowed segment of slaves ``rows``: (segment, found, gap, distance).
-
-    Every pair's squared distance ``|w - q d|^2`` (``w = x - a``, ``q`` the
-    clamped projection) is computed; the pairs within 1.01 times the slave's
-    radius are then measured exactly (the clamps from the signs of
-    ``(x - a).d`` and ``(x - b).d``, an end point taken as the node itself)
-    and put to the rule as the contract states it: a slave never meets a
-    segment ending at its own node; with bodies and without self-contact only
-    other bodies' segments; with self-contact every segment except its own
-    chain's within arc length ``4 r`` of its node (the shorter way round a
-    loop). The nearest allowed pair wins, exact ties to the lower index; it
-    is found within the radius. ``distance`` is its distance, inf where no
-    allowed pair lies within 1.01 times the radius.
-    """
-    x, nodes = np.asarray(x, np.float64), np.asarray(nodes, np.float64)
-    segments = np.asarray(segments, np.int64)
     rows = np.asarray(rows)
     radius = np.broadcast_to(np.asarray(radius, np.float64), (len(x),))
-    a, b = nodes[segments[:, 0]], nodes[segments[:, 1]]
-    d = b - a
-    dd = np.sum(d * d, axis=-1)
-    reach = (1.01 * radius[rows]) ** 2
-    near_rows, near_segments = [], []
-    for start in range(0, len(rows), chunk):
-        p = x[rows[start : start + chunk]]
-        wx = p[:, :1] - a[:, 0]
-        wy = p[:, 1:] - a[:, 1]
-        dot = wx * d[:, 0]
-        dot += wy * d[:, 1]
-        ww = np.square(wx, out=wx)
-        ww += np.square(wy, out=wy)
-        q = np.clip(dot / dd, 0.0, 1.0)
-        ww -= 2 * q * dot
-        ww += np.square(q, out=q) * dd
-        i, k = np.nonzero(ww <= reach[start : start + chunk, None])
-        near_rows.append(i + start)
-        near_segments.append(k)
-    i, k = np.concatenate(near_rows), np.concatenate(near_segments)
-    slave = rows[i]
-    w = x[slave] - a[k]
-    dot = np.sum(w * d[k], axis=-1)
-    t = np.where(dot <= 0, 0.0, np.where(dot >= dd[k], 1.0, dot / dd[k]))
-    point = np.where((t == 1)[:, None], b[k], a[k] + t[:, None] * d[k])
-    e = x[slave] - point
-    dist = np.linalg.norm(e, axis=-1)
-    ok = np.ones(len(i), bool)
-    if slave_node is not None:
-        own = slave_node[slave]
-        ok &= (segments[k, 0] != own) & (segments[k, 1] != own)
-    if self_contact:
-        low, high, loop, node_chain, node_arc = arc_lengths(nodes, segments, topology)
-        s = node_arc[slave_node[slave]]
-        direct = np.maximum(np.maximum(low[k] - s, s - high[k]), 0.0)
-        around = np.where(s < low[k], s + (loop[k] - high[k]), (loop[k] - s) + low[k])
-        same = topology[0][k] == node_chain[slave_node[slave]]
-        ok &= ~(same & (np.minimum(direct, around) < REACH * radius[slave]))
-    elif slave_body is not None and body is not None:
-        ok &= body[k] != slave_body[slave]
-    i, k, e, t, dist = i[ok], k[ok], e[ok], t[ok], dist[ok]
-    order = np.lexsort((k, dist, i))  # per row: nearest first, then the lower index
-    first = order[np.r_[True, i[order][1:] != i[order][:-1]]] if len(order) else order
-    segment = np.full(len(rows), -1, np.int64)
-    distance = np.full(len(rows), np.inf)
-    gap = np.zeros(len(rows))
-    at, k, e, t = i[first], k[first], e[first], t[first]
-    segment[at], distance[at] = k, dist[first]
-    cross = e[:, 0] * d[k, 1] - e[:, 1] * d[k, 0]  # (x - p) x d: the sign of (x - p).n
-    inside = (t > 0) & (t < 1)
-    at_end = np.where(cross >= 0, 1.0, -1.0) * dist[first]
-    gap[at] = np.where(inside, cross / np.sqrt(dd[k]), at_end)
-    found = distance <= radius[rows]
-    return np.where(found, segment, -1), found, np.where(found, gap, 0.0), distance
+    with jax.enable_x64(True):
+        nodes = jnp.asarray(np.asarray(surface.nodes), jnp.float64)
+        contact = all_to_all(
+            jnp.asarray(np.asarray(x)[rows], jnp.float64),
+            surface._replace(nodes=nodes),
+            radius=radius[rows],
+            slave_node=np.asarray(slave_node)[rows],
+            self_contact=True,
+        )
+        found = np.asarray(contact.found)
+        offset = np.asarray(x, np.float64)[rows] - np.asarray(contact.point)
+    distance = np.where(found, np.linalg.norm(offset, axis=-1), np.inf)
+    return np.asarray(contact.segment), found, np.asarray(contact.gap), distance
 
 
 # -- checks ----------------------------------------------------------------------
@@ -228,15 +108,18 @@ def against(contact: Contact, reference: Contact) -> str:
     return text + f", max gap diff {worst:.1e}" + " (over 1e-5!)" * (worst > GAP_TOLERANCE)
 
 
-def against_brute(contact: Contact, rows, brute, radius, scale) -> tuple[str, np.ndarray]:
-    """``brute`` (segment, found, gap, distance on ``rows``) against ``contact``: words and
-    the rows that disagree. A slave whose distance lies within 8 float32 ulps of the
-    coordinates' magnitude ``scale`` of its radius may be found either way: counted apart."""
-    segment, found, gap, distance = brute
+def against_sample(contact: Contact, x, rows, sample, radius, scale) -> tuple[str, np.ndarray]:
+    """``sample`` (segment, found, gap, distance on ``rows``) against ``contact``: words and
+    the rows that disagree. A slave whose distance (the sample's, else its own in
+    ``contact``) lies within 8 float32 ulps of the coordinates' magnitude ``scale`` of its
+    radius may be found either way: counted apart."""
+    segment, found, gap, distance = sample
     radius = np.broadcast_to(np.asarray(radius, np.float64), (np.asarray(contact.gap).shape[0],))
     mine_segment = np.asarray(contact.segment)[rows]
     mine_found = np.asarray(contact.found)[rows]
     mine_gap = np.asarray(contact.gap, np.float64)[rows]
+    own = np.asarray(x, np.float64)[rows] - np.asarray(contact.point, np.float64)[rows]
+    distance = np.where(found, distance, np.linalg.norm(own, axis=-1))
     at_radius = np.abs(distance - radius[rows]) <= 8 * np.finfo(np.float32).eps * scale
     found_differs = (mine_found != found) & ~at_radius
     segment_differs = mine_found & found & (mine_segment != segment)
@@ -314,26 +197,14 @@ def self_contact_part(num_nodes: int, sample: int, repeats: int, warmup: int, rn
             (x, surface),
         )
 
-    # The NumPy brute force on a random sample, timed in the same rounds.
+    # The float64 reference on a random sample, timed in the same rounds.
     nodes64 = np.asarray(x, np.float64)
-    segments64 = np.asarray(surface.segments)
-    node64 = np.asarray(node)
-    topology = outline_arcs(nodes64, segments64)
     rows = np.sort(rng.choice(n, size=min(sample, n), replace=False))
 
-    def numpy_sample(rows=rows):
-        return brute_force(
-            nodes64,
-            nodes64,
-            segments64,
-            rows,
-            radius,
-            slave_node=node64,
-            self_contact=True,
-            topology=topology,
-        )
+    def reference_sample(rows=rows):
+        return sampled_reference(x, surface, rows, radius, slave_node=node)
 
-    calls[f"NumPy f64 brute force, {len(rows):,} sampled slaves"] = (numpy_sample, ())
+    calls[f"all_to_all f64, {len(rows):,} sampled slaves"] = (reference_sample, ())
     timings, results = timed(calls, repeats, warmup)
 
     names = list(calls)
@@ -393,10 +264,11 @@ def self_contact_part(num_nodes: int, sample: int, repeats: int, warmup: int, rn
     name = names[-1]
     found_rows = np.flatnonzero(np.asarray(self_dense.found))
     checked = np.union1d(rows, found_rows)
-    brute = numpy_sample(checked)
+    reference = reference_sample(checked)
     scale = float(np.abs(nodes64).max())
-    words, bad = against_brute(self_dense, checked, brute, radius, scale)
-    compact_words, compact_bad = against_brute(contacts[names[1]], checked, brute, radius, scale)
+    words, bad = against_sample(self_dense, x, checked, reference, radius, scale)
+    compact = contacts[names[1]]
+    compact_words, compact_bad = against_sample(compact, x, checked, reference, radius, scale)
     per_slave = timings[name].median_s / len(rows)
     extrapolated = per_slave * n
     lines.append(
@@ -415,9 +287,9 @@ def self_contact_part(num_nodes: int, sample: int, repeats: int, warmup: int, rn
     for label, wrong in (("dense", bad), ("compact", compact_bad)):
         if len(wrong):
             notes.append(
-                f"{title}: {label} rows that differ from the brute force: "
+                f"{title}: {label} rows that differ from all_to_all in float64: "
                 f"{wrong[:20].tolist()} (reproduce: `curling_chip({num_nodes})`, "
-                "`brute_force` of benchmarks/bodies.py on those rows)."
+                "`sampled_reference` of benchmarks/bodies.py on those rows)."
             )
     ratio = timings[names[0]].median_s / base
     compact_ratio = timings[names[1]].median_s / base
@@ -694,11 +566,10 @@ def main(argv=None) -> int:
         *table(rows),
         "",
         *[f"- {note}" for note in notes],
-        "- NumPy brute force: float64, every slave of the sample against every segment "
-        "(squared distances in chunks of 64 slaves), the pairs within 1.01 r measured exactly "
-        "and put to the rule as docs/contract.md states it; its time per slave is "
-        "extrapolated linearly to N (the chain walk, topology only, is done once outside the "
-        f"timer). Sample drawn with seed {args.seed}. A row whose brute-force distance lies "
+        "- Sampled reference: `all_to_all(..., self_contact=True)` in float64 on the sample's "
+        "slaves against every segment (the library's pair rule, which the tests check against "
+        "the exact oracle); its time per slave is extrapolated linearly to N. "
+        f"Sample drawn with seed {args.seed}. A row whose float64 distance lies "
         "within 8 float32 ulps of the coordinates' magnitude of the radius may be found either "
         "way and is not counted as differing.",
         f"- Whole run {time.perf_counter() - start:.0f} s.",

@@ -5,7 +5,7 @@ the same inputs: float32, jit, compile time apart, median and 10-90 percentile
 spread of repeated runs ended by ``block_until_ready``. Each answer is checked
 against ``all_to_all`` (or ``swept``) in float64 and its mismatches reported.
 "bucket_sort (sized)" and "bucket_swept (sized)" are the bucket sorts with
-their ``Sizes`` measured outside the timer (``jaxcontact._sizes.measure``)
+their ``Sizes`` measured outside the timer (``jaxcontact._pipeline.sizes.measure``)
 and the whole search, broad phase included, inside it; the one-call
 ``bucket_sort`` would measure them again at every call.
 
@@ -25,20 +25,24 @@ from __future__ import annotations
 
 import argparse
 import functools
+import pathlib
+import sys
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))  # the repo root: benchmarks.*
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxcontact import Search, _bucket, all_to_all, swept
-from jaxcontact._sizes import measure
-from jaxcontact.bench._run import sized_contact, sized_crossing
-from jaxcontact.bench.baselines import (
+from benchmarks.harness._run import sized_contact, sized_crossing
+from benchmarks.harness.internals import _bucket, measure
+from benchmarks.harness.timing import pinned_note, time_call
+from benchmarks.peer_codes.baselines import (
     kdtree_pairs_project,
     kdtree_project,
     numpy_box_then_dense,
 )
-from jaxcontact.bench.timing import pinned_note, time_call
+from jaxcontact import Search, all_to_all, swept
 from jaxcontact.scenes import cutting_scene, paper_scene, rough_die_scene
 
 ROWS: list[tuple] = []

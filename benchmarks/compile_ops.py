@@ -31,6 +31,8 @@ import statistics
 import sys
 import time
 
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))  # the repo root: benchmarks.*
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -38,7 +40,7 @@ import numpy as np
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
 from stages import kernel_lines  # noqa: E402
 
-from jaxcontact.bench import _run  # noqa: E402
+from benchmarks.harness import _run  # noqa: E402
 
 REPEATS = 5
 PROGRAM_REPEATS = 3  # part 2's programs take 2-8 s each

@@ -22,18 +22,23 @@ rows find a segment); the sizes bracket that scene's 81,920 rows.
     taskset -c 0 python benchmarks/counting_sort.py
 
 Each form is timed over 50 calls, the forms interleaved
-(``jaxcontact.bench.timing.time_interleaved``); medians.
+(``benchmarks.harness.timing.time_interleaved``); medians.
 """
 
 from __future__ import annotations
+
+import pathlib
+import sys
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))  # the repo root: benchmarks.*
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxcontact._sort import stable_order
-from jaxcontact.bench import _run
-from jaxcontact.bench.timing import time_interleaved
+from benchmarks.harness import _run
+from benchmarks.harness.internals import stable_order
+from benchmarks.harness.timing import time_interleaved
 
 
 def _place(keys, prefix, counts):

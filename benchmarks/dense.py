@@ -5,7 +5,7 @@ n = 250 (63,001 nodes) and n = 286 (82,369 nodes), and the cutting scene at
 81,939 nodes with the tool tip at x = 18 (``all_to_all`` only: nothing moves).
 All in float32, on the CPU.
 
-Each call is timed by ``jaxcontact.bench.timing.time_call``: compilation apart, two
+Each call is timed by ``benchmarks.harness.timing.time_call``: compilation apart, two
 warm-up runs, then the median and p10/p90 of ``--repeats`` runs. In the same
 process, the same textbook brute force answers the same query twice:
 
@@ -31,15 +31,19 @@ from __future__ import annotations
 
 import argparse
 import functools
+import pathlib
+import sys
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))  # the repo root: benchmarks.*
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
+from benchmarks.harness.timing import pinned_note, time_call
+from benchmarks.peer_codes.baselines import brute_crossing
+from benchmarks.peer_codes.baselines import dense_closest as brute_closest
 from jaxcontact import all_to_all, swept
-from jaxcontact.bench.baselines import brute_crossing
-from jaxcontact.bench.baselines import dense_closest as brute_closest
-from jaxcontact.bench.timing import pinned_note, time_call
 from jaxcontact.scenes import cutting_scene, paper_scene
 
 

@@ -24,17 +24,19 @@ from __future__ import annotations
 import argparse
 import functools
 import inspect
+import pathlib
 import sys
 import time
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))  # the repo root: benchmarks.*
 
 import jax
 import numpy as np
 from row_counts import medians  # benchmarks/, beside this script
 
-from jaxcontact import Search, _dense
-from jaxcontact._bucket import sized_bucket_sort, sized_bucket_swept
-from jaxcontact._sizes import measure
-from jaxcontact.bench._run import machine
+from benchmarks.harness._run import machine
+from benchmarks.harness.internals import _dense, measure, sized_bucket_sort, sized_bucket_swept
+from jaxcontact import Search
 from jaxcontact.scenes import cutting_scene, rough_die_scene
 
 OLDER_EMITTERS = {"xla_cpu_use_fusion_emitters": False}

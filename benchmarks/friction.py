@@ -9,7 +9,7 @@ then it is called with the carry it returned last time, on positions that
 alternate between two frames ``x0, x1, x0, ...``, so every step has slip to
 compute. Two warm-up steps, then the median and the 10th-90th percentile of
 ``--repeats`` rounds, the five variants of one scene run round-robin in this
-one process (``jaxcontact.bench.timing.time_interleaved``), every call ended
+one process (``benchmarks.harness.timing.time_interleaved``), every call ended
 by ``block_until_ready``:
 
 1. **plain**: ``Search(radius).closest``, then ``forces.penalty`` (the normal
@@ -67,16 +67,20 @@ piece alone pays it, inside the step it does not).
 from __future__ import annotations
 
 import argparse
+import pathlib
 import sys
 import time
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))  # the repo root: benchmarks.*
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxcontact import Contact, ContactList, Search, _inputs, _normals, _outline, _track
-from jaxcontact.bench._run import machine
-from jaxcontact.bench.timing import time_interleaved
+from benchmarks.harness._run import machine
+from benchmarks.harness.internals import _inputs, _normals, _outline, _track
+from benchmarks.harness.timing import time_interleaved
+from jaxcontact import Contact, ContactList, Search
 from jaxcontact.forces import Friction, coulomb, penalty
 from jaxcontact.scenes import curling_chip, cutting_scene
 

@@ -13,7 +13,7 @@ This script counts the lines of ``/proc/self/maps`` in one process:
    scenes of as many distinct slave counts (between ``--smallest`` and
    ``--largest``, log-spaced), one process; programs compiled (the
    detector's jit caches) and maps added, in total and per call. Plain calls
-   pad to size classes (``jaxcontact._padded``), so most shapes reuse a
+   pad to size classes (``jaxcontact._pipeline.padding``), so most shapes reuse a
    program. Each sweep starts after ``jax.clear_caches()``, which frees the
    maps of the sweep before (so the script itself stays under the limit).
 
@@ -30,15 +30,17 @@ from __future__ import annotations
 
 import argparse
 import os
+import pathlib
 import sys
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))  # the repo root: benchmarks.*
 
 import jax
 import numpy as np
 
+from benchmarks.harness._run import machine
+from benchmarks.harness.internals import exhaustive, sized_jit
 from jaxcontact import all_to_all, bucket_sort, bucket_swept, swept
-from jaxcontact._bucket import contact_jit, crossing_jit
-from jaxcontact._dense import _all_to_all, _swept
-from jaxcontact.bench._run import machine
 from jaxcontact.scenes import cutting_scene, rough_die_scene
 
 
@@ -66,10 +68,11 @@ def detectors():
         return lambda scene: detect(scene.x + np.float32([0.0, 0.05]), scene.x, scene.surface)
 
     return [
-        ("all_to_all", closest(all_to_all), (_all_to_all,)),
-        ("bucket_sort", closest(bucket_sort), (contact_jit,)),
-        ("swept", crossing(swept), (_swept,)),
-        ("bucket_swept", crossing(bucket_swept), (crossing_jit,)),
+        # Both queries share one program per driver: each count is of both.
+        ("all_to_all", closest(all_to_all), (exhaustive,)),
+        ("bucket_sort", closest(bucket_sort), (sized_jit,)),
+        ("swept", crossing(swept), (exhaustive,)),
+        ("bucket_swept", crossing(bucket_swept), (sized_jit,)),
     ]
 
 

@@ -40,11 +40,13 @@ import argparse
 import pathlib
 import sys
 
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))  # the repo root: benchmarks.*
+
 import jax
 import numpy as np
 
-from jaxcontact.bench import _run
-from jaxcontact.bench.timing import _elapsed
+from benchmarks.harness import _run
+from benchmarks.harness.timing import _elapsed
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
 from targets import QUICK, WITHOUT_LARGEST_DIE, build, numba_closest, whole_search_steps  # noqa: E402

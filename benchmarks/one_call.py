@@ -17,7 +17,7 @@ not simply the answer: every detector, plain or jitted, is called on the
 same sequence. The jitted steps' states
 are allocated once, outside the timer, for the 8 configurations
 (``at_least``). Timed round-robin in one process
-(``jaxcontact.bench.timing.time_interleaved``: warm-up calls, then
+(``benchmarks.harness.timing.time_interleaved``: warm-up calls, then
 ``--repeats`` rounds, every call ended by ``block_until_ready``; median and
 10th-90th percentile). The ratio column is each median over the jitted
 ``Search`` step's for the same query; the last, each plain call's over the
@@ -34,14 +34,18 @@ from __future__ import annotations
 
 import argparse
 import itertools
+import pathlib
 import platform
+import sys
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))  # the repo root: benchmarks.*
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
 import jaxcontact
-from jaxcontact.bench.timing import pinned_note, time_interleaved
+from benchmarks.harness.timing import pinned_note, time_interleaved
 from jaxcontact.scenes import cutting_scene, paper_scene
 
 CONFIGURATIONS = 8

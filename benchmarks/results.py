@@ -2,7 +2,7 @@
 
 Each section of ``SECTIONS`` is one script: ``run`` executes it (or the
 sections ``--sections`` names) and stores its markdown under
-``benchmarks/results/<name>.md`` (scripts of ``jaxcontact.bench`` also leave
+``benchmarks/results/<name>.md`` (the suites also leave
 their CSV and PNG files there); then every stored section is assembled, in
 registry order, under a header naming the machine, the versions, the date and
 the commit, after the hand-written ``benchmarks/results/notes.md``. A section

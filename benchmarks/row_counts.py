@@ -22,16 +22,18 @@ from __future__ import annotations
 
 import argparse
 import functools
+import pathlib
 import sys
 import time
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))  # the repo root: benchmarks.*
 
 import jax
 import numpy as np
 
-from jaxcontact import _dense, all_to_all, swept
-from jaxcontact._bucket import sized_bucket_sort, sized_bucket_swept
-from jaxcontact._sizes import measure
-from jaxcontact.bench._run import machine
+from benchmarks.harness._run import machine
+from benchmarks.harness.internals import _dense, measure, sized_bucket_sort, sized_bucket_swept
+from jaxcontact import all_to_all, swept
 from jaxcontact.scenes import cutting_scene
 
 

@@ -26,7 +26,7 @@ gathers them, so every device searches every row; on auto axes the
 compiler partitions the program.
 
 Batches: B cutting scenes (the tool at B positions) under ``jax.vmap`` with
-one ``Sizes`` for the batch (``jaxcontact._sizes.measure_batch``; on the CPU
+one ``Sizes`` for the batch (``jaxcontact._pipeline.sizes.measure_batch``; on the CPU
 the searches inside run scene by scene, the rest batched), against
 ``jax.lax.map`` over the whole detector and a Python loop of single calls,
 each scene with its own sizes; time per scene. The bucket sort rows are
@@ -38,8 +38,11 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import pathlib
 import subprocess
 import sys
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))  # the repo root: benchmarks.*
 
 RESULT = "RESULT "
 
@@ -52,11 +55,17 @@ def worker(devices: int, num_nodes: int, repeats: int, batches: list[int]) -> No
     from jax.sharding import AxisType, NamedSharding
     from jax.sharding import PartitionSpec as P
 
-    from jaxcontact import Surface, _bucket, all_to_all, bucket_sort, sharded
-    from jaxcontact._shard import _device_sizes, _pad_rows, shard_rows
-    from jaxcontact._sizes import measure, measure_batch
-    from jaxcontact.bench._run import sized_contact
-    from jaxcontact.bench.timing import time_call
+    from benchmarks.harness._run import sized_contact
+    from benchmarks.harness.internals import (
+        _bucket,
+        _device_sizes,
+        _pad_rows,
+        measure,
+        measure_batch,
+        shard_rows,
+    )
+    from benchmarks.harness.timing import time_call
+    from jaxcontact import Surface, all_to_all, bucket_sort, sharded
     from jaxcontact.scenes import cutting_scene
 
     assert len(jax.devices()) == devices, jax.devices()

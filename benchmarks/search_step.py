@@ -4,13 +4,13 @@ Two scenes (docs/scenes.md), float32: the cutting scene at 81,939 nodes with
 the tool tip at ``x = 18`` (radius 0.1, skin 0.05; 20 segments, no cells) and
 the rough die at 10^5 nodes x 10^4 segments (radius 0.02, skin 0.01; cells).
 On each, five programs answer the same query on the same ``x``, timed
-round-robin in one process (``jaxcontact.bench.timing.time_interleaved``:
+round-robin in one process (``benchmarks.harness.timing.time_interleaved``:
 each compiled ahead of the runs, its compile time reported apart; warm-up
 runs; then ``--repeats`` rounds, every call ended by ``block_until_ready``;
 median and 10th-90th percentile):
 
 - (a) ``bucket_sort (sized)``: the bucket sort with ``Sizes`` measured once
-  at the radius (``jaxcontact._sizes.measure``) and reused every call
+  at the radius (``jaxcontact._pipeline.sizes.measure``) and reused every call
   (``jaxcontact._bucket.contact_jit``): the broad and the narrow phase every
   call, no measuring.
 - (b) ``Search.closest (reused state)``: ``Search(radius, skin)``, its state
@@ -57,13 +57,15 @@ import os
 import pathlib
 import sys
 
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))  # the repo root: benchmarks.*
+
 import jax
 import numpy as np
 
-from jaxcontact import Contact, Search, _bucket, all_to_all
-from jaxcontact._sizes import measure
-from jaxcontact.bench._run import machine, sized_contact
-from jaxcontact.bench.timing import time_interleaved
+from benchmarks.harness._run import machine, sized_contact
+from benchmarks.harness.internals import _bucket, measure
+from benchmarks.harness.timing import time_interleaved
+from jaxcontact import Contact, Search, all_to_all
 from jaxcontact.scenes import cutting_scene, rough_die_scene
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))

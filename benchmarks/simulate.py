@@ -20,11 +20,15 @@ default) and, for comparison, every node (the cutting scene's slaves).
 from __future__ import annotations
 
 import argparse
+import pathlib
+import sys
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))  # the repo root: benchmarks.*
 
 import jax
 import numpy as np
 
-from jaxcontact.bench.timing import pinned_note
+from benchmarks.harness.timing import pinned_note
 from jaxcontact.sim.demo import run_demo
 
 

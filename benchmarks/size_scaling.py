@@ -10,12 +10,12 @@ M equal steps over ``[0, 20]``, a grid of N slaves over ``[0, 20] x [-0.25,
 N is the grid's own count for the target (``nx * ny``, within a few per cent
 of it); every slope uses the counts the scenes have. On each scene, in one
 process, each method is compiled, its first answer checked, then all are
-timed round-robin (``jaxcontact.bench._run.run_methods``, as ``peers.py``:
+timed round-robin (``benchmarks.harness._run.run_methods``, as ``peers.py``:
 median and 10th-90th percentile, every call ended by ``block_until_ready``;
 20 rounds up to 10^5 slaves, 5 above):
 
 - ``bucket_sort (sized)``: the bucket sort with its ``Sizes`` measured once
-  outside the timer (``jaxcontact._sizes.measure``) and its whole search,
+  outside the timer (``jaxcontact._pipeline.sizes.measure``) and its whole search,
   broad phase included, inside (``_run.sized_contact``);
 - ``Search.closest (reused state)``: ``Search(radius=0.02, skin=0.01)``
   allocated at ``x`` and called on that same ``x``, so the skin rule holds
@@ -27,7 +27,7 @@ median and 10th-90th percentile, every call ended by ``block_until_ready``;
   core of this project's machine: 2 s a call at most); elsewhere its row
   says "not run";
 - ``numba grid (1 thread)``: the hand-written grid of
-  ``jaxcontact.bench.numba_grid``, the fastest CPU peer of ``peers.py``
+  ``benchmarks.peer_codes.numba_grid``, the fastest CPU peer of ``peers.py``
   (cell edge half the median segment length plus the radius, rebuilt every
   call), when numba imports.
 
@@ -50,9 +50,9 @@ What is measured, and why:
   method: a new N, M or set of ``Sizes`` is a new program. Issue 15's target
   is at most 1 s per shape. numba compiles once per dtype, on the first
   scene (0 afterwards).
-- **check**: each answer against the float64 oracle
-  (``jaxcontact.bench.oracle``) of the same float32 numbers; ``ties`` are
-  the library's concave-corner rule at the die's troughs, not errors.
+- **check**: each answer against ``all_to_all`` in float64 on the same
+  float32 numbers (``benchmarks.harness.answers``); ``ties`` are a segment
+  equally near as the reference's, not errors.
 
 Nothing is capped: the full run takes 4 to 7 minutes on this project's 2
 cores, depending on what else runs (its own time is in the section's first
@@ -68,17 +68,20 @@ decides; run it pinned too (``python benchmarks/results.py --pinned
 from __future__ import annotations
 
 import functools
+import pathlib
 import sys
 import time
 from typing import NamedTuple
 
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))  # the repo root: benchmarks.*
+
 import jax
 import numpy as np
 
+from benchmarks.harness import _run, answers
+from benchmarks.harness.internals import measure, measure_contacts
+from benchmarks.peer_codes import baselines
 from jaxcontact import Search, all_to_all
-from jaxcontact._bucket import measure_contacts
-from jaxcontact._sizes import measure
-from jaxcontact.bench import _run, baselines, oracle
 from jaxcontact.scenes import rough_die_scene
 
 LIBRARY = "bucket_sort (sized)"
@@ -160,10 +163,10 @@ def run_scene(num_nodes, num_segments, repeats, slow_s, names=METHODS) -> list[d
     scene = rough_die_scene(num_nodes, num_segments)
     x = np.asarray(scene.x)
     start, end = _run.endpoints(scene.surface)
-    reference = oracle.reference_contact(x, start, end, scene.radius)
+    reference = answers.reference_contact(x, scene.surface, scene.radius)
 
     def check(result):
-        fields = _run.oracle_fields(result, x, start, end, reference)
+        fields = _run.reference_fields(result, x, start, end, reference)
         state = result[-1]
         if hasattr(state, "rebuilds"):  # the Search step's state: were the candidates kept?
             fields["note"] += f"; candidates found again {int(state.rebuilds)} times"
@@ -273,11 +276,11 @@ def scene_table(scene_rows, names, value) -> list[str]:
 
 def plot(against_n, against_m, names, out) -> list[str]:
     """Time against N, time against M and memory against N, log-log, one line per method
-    (one look per method: ``jaxcontact.bench.style``), each panel's legend below it."""
+    (one look per method: ``benchmarks.harness.style``), each panel's legend below it."""
     plt = _run.pyplot(out)
     if plt is None:
         return []
-    from jaxcontact.bench import style
+    from benchmarks.harness import style
 
     figure, (by_n, by_m, memory) = plt.subplots(1, 3, figsize=(15, 6.2))
     used = {}
@@ -346,7 +349,7 @@ def report(by_scene, sweeps, names, out, quick, elapsed_s) -> str:
         "",
         *scene_table([by_scene[key] for key in by_scene], names, _compile),
         "",
-        "Every row, checked against the float64 oracle:",
+        "Every row, checked against all_to_all in float64:",
         "",
         _run.markdown(rows, (*columns, *more)),
     ]

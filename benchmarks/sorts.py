@@ -17,7 +17,7 @@ computed as the searches compute them, with the sizes ``measure`` picks:
   those of the real segments, as ``node + 1``, against ``num_nodes + 1`` values).
 
 Each form is checked to give the stable argsort's order, then timed over 30
-interleaved calls (``jaxcontact.bench.timing.time_interleaved``); medians, ms.
+interleaved calls (``benchmarks.harness.timing.time_interleaved``); medians, ms.
 
     python benchmarks/sorts.py            # both cores
     taskset -c 0 python benchmarks/sorts.py
@@ -27,18 +27,28 @@ interleaved calls (``jaxcontact.bench.timing.time_interleaved``); medians, ms.
 from __future__ import annotations
 
 import argparse
+import pathlib
+import sys
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))  # the repo root: benchmarks.*
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxcontact import _inputs
-from jaxcontact._broad import segment_boxes
-from jaxcontact._cells import Grid, cell_entries, num_lists
-from jaxcontact._sizes import measure
-from jaxcontact._sort import packs, sorted_pairs, stable_order
-from jaxcontact.bench import _run
-from jaxcontact.bench.timing import time_interleaved
+from benchmarks.harness import _run
+from benchmarks.harness.internals import (
+    Grid,
+    _inputs,
+    cell_entries,
+    measure,
+    num_lists,
+    packs,
+    segment_boxes,
+    sorted_pairs,
+    stable_order,
+)
+from benchmarks.harness.timing import time_interleaved
 from jaxcontact.scenes import curling_chip, rough_die_scene
 
 SCENES = {

@@ -42,7 +42,7 @@ import jax.numpy as jnp  # noqa: E402
 import jaxcontact  # noqa: E402
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))  # the oracle lives with the tests
+sys.path.insert(0, str(ROOT))  # the repo root: tests.oracle, benchmarks.*
 from tests import oracle  # noqa: E402
 
 DTYPES = {"float32": np.float32, "float64": np.float64}
@@ -303,13 +303,13 @@ def _table(rows):
 
 def _plot(rows, x_key, y_keys, path, title, xlabel, ylabel, group="dtype", log_y=True):
     """One line per ``group`` and ``y_keys`` entry; an entry whose format has no marker (a
-    bound) drawn as that group's guide. Looks from ``jaxcontact.bench.style``."""
+    bound) drawn as that group's guide. Looks from ``benchmarks.harness.style``."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from jaxcontact.bench import style
+    from benchmarks.harness import style
 
     figure, axes = plt.subplots(figsize=(8, 4), layout="constrained")
     used = {}

@@ -45,29 +45,38 @@ import glob
 import gzip
 import json
 import os
+import pathlib
 import re
 import subprocess
 import sys
 import tempfile
 from collections import Counter
 
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))  # the repo root: benchmarks.*
+
 import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxcontact import _inputs
-from jaxcontact._assemble import contact_from_choice
-from jaxcontact._broad import broad_phase, kept_rows
-from jaxcontact._bucket import measure_contacts
-from jaxcontact._cells import list_candidates
-from jaxcontact._geometry import squared_distance
-from jaxcontact._narrow import search_all, search_listed, vmapped
-from jaxcontact._pairs import ruled
-from jaxcontact._sizes import measure
-from jaxcontact._writeback import empty_contact, write_blocks
-from jaxcontact.bench import _run
-from jaxcontact.bench.peers import build
-from jaxcontact.bench.timing import time_interleaved
+from benchmarks.harness import _run
+from benchmarks.harness.internals import (
+    _inputs,
+    broad_phase,
+    contact_from_choice,
+    empty_contact,
+    kept_rows,
+    list_candidates,
+    measure,
+    measure_contacts,
+    ruled,
+    search_all,
+    search_listed,
+    squared_distance,
+    vmapped,
+    write_blocks,
+)
+from benchmarks.harness.timing import time_interleaved
+from benchmarks.peers import build
 
 SCENES = {
     "cutting-10000": ("cutting, tool in (x_tip=18)", 10_000, 18.0),
@@ -358,7 +367,7 @@ def _sized_then(measure_then, sized_contact, scene, surface):
 
 def numba_call(scene):
     """The numba grid on one thread, compiled, or None where numba is missing."""
-    from jaxcontact.bench import baselines, numba_grid
+    from benchmarks.peer_codes import baselines, numba_grid
 
     if baselines.unavailable("numba grid (1 thread)"):
         return None

@@ -1,7 +1,7 @@
 """Issue 25's targets 1 and 2, scene by scene: ``Search.closest`` beside the numba grid.
 
 On every reference scene (float32, ``docs/scenes.md``) one process times,
-round-robin (``jaxcontact.bench.timing.time_interleaved``: compiled ahead,
+round-robin (``benchmarks.harness.timing.time_interleaved``: compiled ahead,
 its compile time apart, two warm-up runs, then ``--repeats`` rounds, every
 call ended by ``block_until_ready``; median and 10th-90th percentile):
 
@@ -15,7 +15,7 @@ call ended by ``block_until_ready``; median and 10th-90th percentile):
     allocation's positions): the skin check, then the narrow phase on the
     candidates kept since ``allocate``. It is a simulation's step while
     nothing has moved a skin.
-- the hand-written numba grid (``jaxcontact.bench.numba_grid``) on one
+- the hand-written numba grid (``benchmarks.peer_codes.numba_grid``) on one
   thread, and on two unless the process is pinned to one core. It is built
   and searched on every call.
 
@@ -58,12 +58,14 @@ import os
 import pathlib
 import sys
 
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))  # the repo root: benchmarks.*
+
 import jax
 import numpy as np
 
+from benchmarks.harness import _run
+from benchmarks.harness.timing import time_interleaved
 from jaxcontact import Search
-from jaxcontact.bench import _run
-from jaxcontact.bench.timing import time_interleaved
 from jaxcontact.scenes import curling_chip, cutting_scene, rough_die_scene
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))

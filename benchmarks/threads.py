@@ -15,7 +15,7 @@ forms is compiled twice from one lowering: with XLA's defaults, and with
 (``time_interleaved``: two warm-up runs, then ``--repeats`` rounds), and
 their answers compared field by field, bit for bit, with glibc's allocator
 keeping freed pages (as in ``benchmarks/targets.py``). The hand-written numba
-grid on one thread (``jaxcontact.bench.numba_grid``, as in
+grid on one thread (``benchmarks.peer_codes.numba_grid``, as in
 ``benchmarks/targets.py``) runs in the same rounds, where numba is
 installed: the last columns are its median over each of jaxcontact's.
 
@@ -34,11 +34,13 @@ import argparse
 import pathlib
 import sys
 
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))  # the repo root: benchmarks.*
+
 import jax
 import numpy as np
 
-from jaxcontact.bench import _run
-from jaxcontact.bench.timing import time_interleaved
+from benchmarks.harness import _run
+from benchmarks.harness.timing import time_interleaved
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
 from targets import QUICK, WITHOUT_LARGEST_DIE, build, numba_closest, whole_search_steps  # noqa: E402

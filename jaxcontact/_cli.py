@@ -7,9 +7,11 @@ writes summary.json, chip.png, forces.png and chip.gif);
 (``jaxcontact.sim.demo``); ``jaxcontact demo --scene paper`` runs the source
 paper's scene (docs/scenes.md, Test 1) through both dense detectors, prints
 what they found and how long they took, and draws the scene near the tool
-tip. An option of one scene given with another is refused. Each subcommand
-is one ``_<name>`` function registered in ``_parser``, so new ones
-(``bench``) slot in beside it.
+tip. An option of one scene given with another is refused. ``jaxcontact
+bench`` times jaxcontact's own forms on the reference scenes
+(``jaxcontact._selftime``); the comparisons with other libraries are the
+repository's ``benchmarks/`` folder, not installed. Each subcommand is
+registered in ``_parser``.
 """
 
 from __future__ import annotations
@@ -22,10 +24,8 @@ import sys
 import jax
 import numpy as np
 
-from jaxcontact import all_to_all, swept
-from jaxcontact.bench import add_arguments as add_bench_arguments
-from jaxcontact.bench import run_all as run_bench
-from jaxcontact.bench.timing import pinned_note, time_call
+from jaxcontact import _selftime, all_to_all, swept
+from jaxcontact._timing import pinned_note, time_call
 from jaxcontact.scenes import paper_scene
 from jaxcontact.sim import cutting_demo as _cutting_demo
 from jaxcontact.sim import demo as _demo_sim
@@ -225,9 +225,13 @@ def _parser() -> argparse.ArgumentParser:
         for action in options.actions:
             scenes[action.option_strings[0]] = (action.dest, action.default, (name,))
     demo.set_defaults(run=_demo, check=functools.partial(_check_demo, demo, scenes))
-    bench = commands.add_parser("bench", help="run the benchmarks; write CSV and PNG files")
-    add_bench_arguments(bench)
-    bench.set_defaults(run=run_bench)
+    bench = commands.add_parser(
+        "bench",
+        help="time jaxcontact's own forms on the reference scenes; write a CSV and a PNG",
+        description=_selftime.__doc__.splitlines()[0],
+    )
+    _selftime.add_arguments(bench)
+    bench.set_defaults(run=_selftime.run)
     return parser
 
 

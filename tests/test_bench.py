@@ -1,4 +1,4 @@
-"""The benchmark package at tiny sizes: its oracle, its checker, its rows and files.
+"""The benchmarks' shared code at tiny sizes: their reference, checker, rows and files.
 
 The timings themselves are not tested (a loaded machine makes any bound
 flaky); what is tested is that every answer is checked, and that a wrong
@@ -12,10 +12,12 @@ import pathlib
 import numpy as np
 import pytest
 
+from benchmarks import peers, swept_peers
+from benchmarks.harness import _run, answers
+from benchmarks.harness.timing import time_interleaved
+from benchmarks.peer_codes import baselines
 from jaxcontact import Surface, swept
 from jaxcontact._cli import _parser
-from jaxcontact.bench import _run, baselines, oracle, peers, swept_peers
-from jaxcontact.bench.timing import time_interleaved
 from jaxcontact.scenes import cutting_scene, paper_scene, rough_die_scene
 from tests.oracle import oracle_contact
 
@@ -25,34 +27,39 @@ def _scene_arrays(scene):
     return np.asarray(scene.x), start, end
 
 
+@pytest.mark.x64  # the reference is all_to_all in float64
 @pytest.mark.parametrize("build", [lambda: paper_scene(9), lambda: cutting_scene(300, 18.0)])
 def test_reference_equals_exact_oracle(build):
-    """The float64 reference agrees with the exact-fraction oracle, ties included."""
+    """The reference, searched in chunks of slaves against the segments near each
+    chunk, agrees with the exact-fraction oracle, ties included."""
     scene = build()
-    x, start, end = _scene_arrays(scene)
-    reference = oracle.reference_contact(x, start, end, scene.radius, chunk=16)
+    x, _, _ = _scene_arrays(scene)
+    reference = answers.reference_contact(x, scene.surface, scene.radius, chunk=16)
     exact = oracle_contact(x, scene.surface.nodes, scene.surface.segments, radius=scene.radius)
     np.testing.assert_array_equal(reference.segment, exact.segment)
     np.testing.assert_allclose(reference.gap[exact.found], exact.gap[exact.found], atol=1e-12)
 
 
+@pytest.mark.x64
 def test_reference_gives_a_shared_vertex_to_the_face_the_slave_is_outside_of():
     # Segments 0: (1, 1) -> (0, 0) and 1: (0, 0) -> (1, -1); a convex corner at the origin.
-    start, end = np.array([[1.0, 1.0], [0.0, 0.0]]), np.array([[0.0, 0.0], [1.0, -1.0]])
+    surface = Surface(np.array([[1.0, 1.0], [0.0, 0.0], [1.0, -1.0]]), np.array([[0, 1], [1, 2]]))
+    start, end = _run.endpoints(surface)
     # Equally far from both faces: outside segment 1 only (its normal (-1, -1)/sqrt 2).
     x = np.array([[-0.1, -0.2]])
-    distance, gap = oracle.evaluate(x, start, end, [1])
+    distance, gap = answers.evaluate(x, start, end, [1])
     assert gap[0] > 0
-    assert oracle.reference_contact(x, start, end, 1.0).segment.tolist() == [1]
+    assert answers.reference_contact(x, surface, 1.0).segment.tolist() == [1]
 
 
+@pytest.mark.x64
 def test_compare_reports_every_kind_of_wrong_answer():
     scene = cutting_scene(2_000, 18.0)
     x, start, end = _scene_arrays(scene)
-    reference = oracle.reference_contact(x, start, end, scene.radius)
+    reference = answers.reference_contact(x, scene.surface, scene.radius)
     assert reference.found.sum() > 5
     right = baselines.numpy_dense(x, start, end, scene.radius)
-    assert oracle.compare(*right, x, start, end, reference).wrong_segment == 0
+    assert answers.compare(*right, x, start, end, reference).wrong_segment == 0
 
     segment, gap, found = (part.copy() for part in right)
     rows = np.flatnonzero(found)
@@ -61,21 +68,22 @@ def test_compare_reports_every_kind_of_wrong_answer():
     gap[rows[2]] += 0.01  # a gap error
     far = np.argmax(np.abs(x - start[0]).sum(axis=1))
     segment[far], found[far] = 0, True  # a false contact
-    wrong = oracle.compare(segment, gap, found, x, start, end, reference)
+    wrong = answers.compare(segment, gap, found, x, start, end, reference)
     assert (wrong.missed, wrong.false, wrong.wrong_segment) == (1, 1, 1)
     assert wrong.max_gap_error >= 0.01
     assert wrong.wrong_by > 0
-    assert "1 missed" in oracle.describe(wrong) and "1 wrong segment" in oracle.describe(wrong)
+    assert "1 missed" in answers.describe(wrong) and "1 wrong segment" in answers.describe(wrong)
 
 
 # jax-md is left to the benchmark's own check: importing it takes 15 s (flax, pymatgen).
+@pytest.mark.x64
 @pytest.mark.parametrize("name", [name for name in baselines.PEERS if name != "jax-md cell list"])
 def test_every_peer_agrees_with_the_reference_up_to_ties(name):
     if baselines.unavailable(name):
         pytest.skip(baselines.unavailable(name))
     for scene in (cutting_scene(500, 18.0), rough_die_scene(1_000, 100)):
         x, start, end = _scene_arrays(scene)
-        reference = oracle.reference_contact(x, start, end, scene.radius)
+        reference = answers.reference_contact(x, scene.surface, scene.radius)
         fn, args = baselines.PEERS[name][1](x, start, end, scene.radius)
         mismatch = _run.check(fn(*args), x, start, end, reference)
         assert (mismatch.missed, mismatch.false, mismatch.wrong_segment) == (0, 0, 0), mismatch
@@ -106,7 +114,7 @@ def test_every_swept_peer_agrees_with_float64_swept(name):
 def test_numba_swept_follows_the_contract_at_its_edge_cases():
     """Touching an end, arriving at t = 1, starting on the segment, along its line, parallel."""
     pytest.importorskip("numba")
-    from jaxcontact.bench import numba_grid
+    from benchmarks.peer_codes import numba_grid
 
     start, end = np.array([[0.0, 0.0]]), np.array([[2.0, 0.0]])
     paths = np.array(
@@ -132,7 +140,7 @@ def test_numba_swept_follows_the_contract_at_its_edge_cases():
 
 def test_numba_closest_with_no_slaves():
     pytest.importorskip("numba")
-    from jaxcontact.bench import numba_grid
+    from benchmarks.peer_codes import numba_grid
 
     segment, gap, found = numba_grid.closest(
         np.zeros((0, 2), np.float32), np.zeros((1, 2), np.float32), np.ones((1, 2), np.float32), 1
@@ -296,13 +304,14 @@ def test_size_scaling_rows_slopes_and_figure(tmp_path, monkeypatch):
         assert (tmp_path / "size_scaling.png").exists()
 
 
+@pytest.mark.x64
 def test_sizes_too_small_are_counted_as_missed_contacts():
+    from benchmarks import time_vs_error
     from jaxcontact._pipeline.sizes import measure
-    from jaxcontact.bench import time_vs_error
 
     scene = cutting_scene(2_000, 18.0)
     x, start, end = _scene_arrays(scene)
-    reference = oracle.reference_contact(x, start, end, scene.radius)
+    reference = answers.reference_contact(x, scene.surface, scene.radius)
     sizes = measure(scene.x, scene.surface, radius=scene.radius)
     right = _run.sized_contact(scene.radius, sizes)(scene.x, scene.surface)
     assert not bool(right.overflow)
@@ -314,13 +323,14 @@ def test_sizes_too_small_are_counted_as_missed_contacts():
     assert bool(contact.overflow) and mismatch.missed > 0
 
 
+@pytest.mark.x64  # the reference is all_to_all in float64
 def test_paper_test1_rows():
-    from jaxcontact.bench import paper_tests
+    from benchmarks import paper_tests
 
     rows = paper_tests.run_test1((1,), repeats=1)
     assert [row["method"] for row in rows] == list(paper_tests.METHODS)
     assert all(row["nodes"] == 4 and row["median_ms"] > 0 for row in rows)
-    assert rows[0]["note"] == "same contacts"  # all_to_all against the float64 oracle
+    assert rows[0]["note"] == "same contacts"  # all_to_all against itself in float64
     assert "0 rows differ" in rows[2]["note"]  # swept against the float64 brute force
     assert "0 rows differ" in rows[3]["note"]  # bucket_swept (sized), likewise
     assert "| all_to_all |" in paper_tests.averages(rows)

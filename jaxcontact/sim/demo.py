@@ -21,7 +21,7 @@ import jax
 import numpy as np
 
 from jaxcontact import all_to_all
-from jaxcontact.bench.timing import Timing, pinned_note
+from jaxcontact._timing import Timing, pinned_note
 from jaxcontact.sim.elastic import stresses, von_mises
 from jaxcontact.sim.ploughing import History, ploughing, run, simulate, tool_surface
 

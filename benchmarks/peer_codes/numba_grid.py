@@ -152,7 +152,7 @@ def _kernels():
                         best, best_k, best_cross = distance_squared, k, cross
                     elif distance_squared == best and best_k >= 0:
                         # An exact tie (a shared vertex): the larger signed normal
-                        # distance cross / |d|, as the float64 oracle; then the lower
+                        # distance cross / |d|, as the float64 reference; then the lower
                         # index, which the ascending lists give by keeping the first.
                         dx, dy = bx - ax, by - ay
                         bdx = np.float64(end[best_k, 0]) - np.float64(start[best_k, 0])

@@ -2,7 +2,7 @@
 
 Every benchmark collects ``dict`` rows with the same keys (``COLUMNS``), so
 one CSV writer and one table printer serve them all, and a row carries its
-own oracle check beside its timing. ``sized_contact`` and ``sized_crossing``
+own check against the reference beside its timing. ``sized_contact`` and ``sized_crossing``
 are the bucket sorts the benchmarks time: fixed ``Sizes`` measured outside
 the timer, the whole search (broad phase included) inside it.
 """
@@ -22,10 +22,11 @@ import time
 import jax
 import numpy as np
 
-from jaxcontact import _bucket
-from jaxcontact._types import ContactList
-from jaxcontact.bench import numba_grid, oracle
-from jaxcontact.bench.timing import Timing, compiled_call, pinned_note, time_interleaved
+from benchmarks.harness import answers
+from benchmarks.harness.internals import _bucket
+from benchmarks.harness.timing import Timing, compiled_call, pinned_note, time_interleaved
+from benchmarks.peer_codes import numba_grid
+from jaxcontact import ContactList
 
 COLUMNS = (
     "scene",
@@ -55,7 +56,7 @@ COLUMNS = (
 
 
 def row(scene, nodes, segments, method, timing=None, mismatch=None, **fields) -> dict:
-    """One result row; ``timing`` a ``Timing`` (or None: not run), ``mismatch`` an oracle one.
+    """One result row; ``timing`` a ``Timing`` (or None: not run), ``mismatch`` a ``Mismatch``.
 
     Example:
       >>> row("cutting", 10, 20, "NumPy dense", note="skipped")["median_ms"]
@@ -72,7 +73,7 @@ def row(scene, nodes, segments, method, timing=None, mismatch=None, **fields) ->
 
 
 def mismatch_fields(mismatch) -> dict:
-    """The row fields of an oracle ``Mismatch``: its counts, the errors formatted."""
+    """The row fields of an ``answers.Mismatch``: its counts, the errors formatted."""
     return {
         **mismatch._asdict(),
         "max_gap_error": f"{mismatch.max_gap_error:.3g}",
@@ -225,17 +226,17 @@ def answer_of(result, num_rows: int | None = None):
     return tuple(np.asarray(part) for part in result[:3])
 
 
-def check(result, x, start, end, reference) -> oracle.Mismatch:
-    """The oracle's count of how ``result`` differs from ``reference``."""
-    return oracle.compare(*answer_of(result, len(x)), x, start, end, reference)
+def check(result, x, start, end, reference) -> answers.Mismatch:
+    """``answers.compare``'s count of how ``result`` differs from ``reference``."""
+    return answers.compare(*answer_of(result, len(x)), x, start, end, reference)
 
 
-def oracle_fields(result, x, start, end, reference) -> dict:
-    """The row fields of ``result`` checked against ``reference``: the oracle's counts, and a
-    note that says them in words (and says ``overflow`` where a ``Contact`` set it)."""
+def reference_fields(result, x, start, end, reference) -> dict:
+    """The row fields of ``result`` checked against ``reference``: ``answers.compare``'s
+    counts, and a note that says them in words (and ``overflow`` where a ``Contact`` set it)."""
     mismatch = check(result, x, start, end, reference)
     overflow = "; overflow" if bool(getattr(contact_of(result), "overflow", False)) else ""
-    return {**mismatch_fields(mismatch), "note": oracle.describe(mismatch) + overflow}
+    return {**mismatch_fields(mismatch), "note": answers.describe(mismatch) + overflow}
 
 
 def endpoints(surface):

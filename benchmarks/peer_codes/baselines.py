@@ -3,7 +3,7 @@
 Each peer takes NumPy arrays ``x`` f[N, 2], segment ``start`` and ``end``
 f[M, 2] and the ``radius``, and returns ``(segment, gap, found)`` as NumPy
 arrays (``segment`` -1 where not found), so one checker reads them all
-(``oracle.compare``). Optional packages are imported inside the functions:
+(``benchmarks.harness.answers.compare``). Optional packages are imported inside the functions:
 ``unavailable`` says which peers cannot run here, and why.
 
 - NumPy dense: every slave-segment pair at once, ``argmin`` over segments.
@@ -33,7 +33,8 @@ import importlib
 
 import numpy as np
 
-from jaxcontact.bench import _run, ipc
+from benchmarks.harness import _run
+from benchmarks.peer_codes import ipc
 
 
 def cross(u, v):

@@ -1,34 +1,27 @@
-"""The float64 reference every benchmark checks its answers against.
+"""How a method's closest-point answer differs from a reference answer on the same scene.
 
-A NumPy brute force in float64: the closest segment of non-zero length and,
-of segments at exactly equal float64 distance (any of them, whether or not
-they share a vertex), the one with the larger signed normal distance
-``(x - p) . n``, then the lower index. The gap is ``+-|x - p|`` with the sign
-of the chosen segment's ``(x - p) . n`` (zero counts as positive).
+The reference is ``jaxcontact.all_to_all`` in float64 on the scene's very
+numbers (the reference of a float32 scene is the float64 answer for the same
+float32 numbers), with the library's own tie rules (docs/contract.md,
+"Ties"); the test suite's exact oracle (``tests/oracle.py``) is what checks
+``all_to_all`` itself. ``compare`` counts a segment other than the
+reference's, at exactly the reference's float64 distance, as a tie, not an
+error: a peer may pick either of two equally near segments.
 
-That is the library's vertex-tie rule at a convex corner only
-(docs/contract.md, "Ties"). The library gives a tie at a concave corner to
-the smaller normal distance, with the gap's sign from exact sign tests
-(inside when inside either face), and a tie away from a shared vertex, or
-between segments that do not share the node index, to the lower index. Where
-the two differ the segments are at the same distance, so ``compare`` counts
-the library's answer as a tie, not an error: on the rough die, whose troughs
-are concave corners, the library's own rows show such ties.
-
-Slaves are taken in chunks sorted by x, and each chunk is projected only on
+Slaves are taken in chunks sorted by x, and each chunk is searched only among
 the segments whose box comes within the radius of the chunk's box, so the
 rough die at 10^6 x 10^5 stays affordable while every pair that could matter
-is still evaluated exactly as the dense brute force would.
-
-The inputs are converted to float64 as given: the reference of a float32
-scene is the float64 answer for the very same float32 numbers.
+is still evaluated.
 """
 
 from __future__ import annotations
 
 from typing import NamedTuple
 
+import jax
 import numpy as np
+
+from jaxcontact import all_to_all
 
 
 class Reference(NamedTuple):
@@ -78,31 +71,43 @@ def _endpoints(x, start, end):
     return x, start, end, real
 
 
-def reference_contact(x, start, end, radius, *, chunk: int = 2048) -> Reference:
-    """The closest segment of every slave within ``radius``, in float64.
+def reference_contact(x, surface, radius, *, chunk: int = 2048) -> Reference:
+    """The closest segment of every slave within ``radius``: ``all_to_all`` in float64.
 
     Args:
       x: f[N, 2] slaves (any float dtype; converted to float64).
-      start: f[M, 2] segment starts.
-      end: f[M, 2] segment ends.
-      radius: the search radius.
-      chunk: slaves projected together.
+      surface: the master ``Surface`` (its nodes converted to float64).
+      radius: the search radius, a scalar.
+      chunk: slaves searched together.
 
     Returns:
       A ``Reference``.
 
+    Raises:
+      ValueError: where ``jax_enable_x64`` is off (the benchmarks' entry points set it).
+
     Example:
       >>> import numpy as np
-      >>> ref = reference_contact([[0.5, -0.1], [5.0, 5.0]], [[0.0, 0.0]], [[1.0, 0.0]], 0.2)
+      >>> from jaxcontact import Surface
+      >>> tool = Surface(np.array([[0.0, 0.0], [1.0, 0.0]]), np.array([[0, 1]]))
+      >>> ref = reference_contact([[0.5, -0.1], [5.0, 5.0]], tool, 0.2)
       >>> ref.segment.tolist(), np.round(ref.gap, 6).tolist(), ref.found.tolist()
       ([0, -1], [0.1, 0.0], [True, False])
     """
-    x, start, end, real = _endpoints(x, start, end)
+    if not jax.config.jax_enable_x64:
+        raise ValueError("reference_contact needs jax_enable_x64 (the bench entry points set it)")
+    x = np.asarray(x, np.float64).reshape(-1, 2)
+    nodes = np.asarray(surface.nodes, np.float64)
+    segments = np.asarray(surface.segments)
+    real = np.ones(len(segments), bool) if surface.mask is None else np.asarray(surface.mask)
+    body = None if surface.body is None else np.asarray(surface.body)
+    start, end = nodes[np.maximum(segments[:, 0], 0)], nodes[np.maximum(segments[:, 1], 0)]
+    low = np.minimum(start, end) - radius
+    high = np.maximum(start, end) + radius
     count = len(x)
     segment = np.full(count, -1, np.int64)
     gap = np.zeros(count)
-    low = np.minimum(start, end) - radius
-    high = np.maximum(start, end) + radius
+    detect = jax.jit(all_to_all)
     order = np.argsort(x[:, 0], kind="stable")
     for first in range(0, count, chunk):
         rows = order[first : first + chunk]
@@ -110,18 +115,27 @@ def reference_contact(x, start, end, radius, *, chunk: int = 2048) -> Reference:
         near = np.flatnonzero(real & np.all((high >= box_low) & (low <= box_high), axis=1))
         if near.size == 0:
             continue
-        distance_squared, normal = _project(x[rows, None], start[near][None], end[near][None])
-        nearest = distance_squared.min(axis=1, keepdims=True)
-        # Of exactly equal distances (at a vertex or not, convex or concave), the
-        # larger signed normal distance, then the lower index (argmax returns the
-        # first of equal maxima; near is ascending).
-        best = np.argmax(np.where(distance_squared == nearest, normal, -np.inf), axis=1)
-        within = nearest[:, 0] <= radius * radius
-        taken = np.arange(len(rows))
-        distance = np.sqrt(nearest[:, 0])
-        signed = np.where(normal[taken, best] < 0, -distance, distance)
-        segment[rows[within]] = near[best[within]]
-        gap[rows[within]] = signed[within]
+        # Padded to a power of two (slaves and segments, masked), so that a few
+        # programs serve every chunk instead of one compiled per chunk's shape.
+        width = 1 << int(near.size - 1).bit_length()
+        kept = np.zeros(width, bool)
+        kept[: near.size] = True
+        taken = np.zeros(width, np.int64)
+        taken[: near.size] = near
+        slaves = np.zeros((chunk, 2))
+        slaves[: len(rows)] = x[rows]
+        mask = np.arange(chunk) < len(rows)
+        part = surface._replace(
+            nodes=nodes,
+            segments=segments[taken],
+            mask=kept,
+            body=None if body is None else body[taken],
+        )
+        contact = detect(slaves, part, radius=radius, mask=mask)
+        found = np.asarray(contact.found)[: len(rows)]
+        chosen = np.asarray(contact.segment)[: len(rows)]
+        segment[rows[found]] = taken[chosen[found]]
+        gap[rows[found]] = np.asarray(contact.gap)[: len(rows)][found]
     return Reference(segment, gap, segment >= 0)
 
 
@@ -145,14 +159,13 @@ def compare(segment, gap, found, x, start, end, reference: Reference) -> Mismatc
     """Counts how ``(segment, gap, found)`` differs from ``reference`` on the same scene.
 
     A segment other than the reference's at exactly the reference's float64
-    distance is a tie (a shared vertex, or two segments equally near: a peer
-    may pick either, and at a concave corner the library's rule picks the
-    face this reference does not); its gap is compared with that segment's
-    own, signed by its own ``(x - p) . n``.
+    distance (both measured by ``evaluate``) is a tie: a shared vertex, or two
+    segments equally near, of which a peer may pick either. Its gap is
+    compared with that segment's own, signed by its own ``(x - p) . n``.
 
     Example:
       >>> x, start, end = [[0.5, -0.1]], [[0.0, 0.0]], [[1.0, 0.0]]
-      >>> ref = reference_contact(x, start, end, 0.2)
+      >>> ref = Reference(np.array([0]), np.array([0.1]), np.array([True]))
       >>> compare([-1], [0.0], [False], x, start, end, ref).missed
       1
     """
@@ -162,7 +175,7 @@ def compare(segment, gap, found, x, start, end, reference: Reference) -> Mismatc
     both = found & reference.found
     other = both & (segment != reference.segment)
     distance, own_gap = evaluate(x, start, end, segment)
-    reference_distance = np.abs(reference.gap)
+    reference_distance, _ = evaluate(x, start, end, reference.segment)
     ties = other & (distance == reference_distance)
     expected = np.where(ties, own_gap, reference.gap)
     errors = np.abs(gap - expected)[both & ~(other & ~ties)]

@@ -1,4 +1,4 @@
-"""Wall-clock timing of JAX calls, shared by the command line and the benchmarks.
+"""Wall-clock timing of JAX calls: ``jaxcontact demo`` and ``jaxcontact bench`` use it.
 
 JAX dispatches asynchronously, so a call returns before its result exists;
 every timed call here ends with ``jax.block_until_ready``. Compilation is
