@@ -322,12 +322,19 @@ def test_bucket_swept_equals_swept_on_random_polylines(scaled_scene, move, bucke
 
 
 def test_sizes_fields():
+    # The fields against the scene they were measured on, counted here: the
+    # kept blocks hold every block of consecutive rows with a slave in reach.
     scene = rough_die_scene(4_000, 400)
     sizes = measure(scene.x, scene.surface, radius=scene.radius)
-    assert isinstance(sizes, Sizes)
-    assert sizes.slave_capacity == sizes.block_capacity * sizes.block_size
-    assert sizes.grid_shape[0] > 1 and sizes.cell_capacity >= 1
+    assert isinstance(sizes, Sizes) and sizes.num_slaves == scene.x.shape[0]
+    found = np.asarray(all_to_all(scene.x, scene.surface, radius=scene.radius).found)
+    blocks = np.add.reduceat(found, np.arange(0, len(found), sizes.block_size)) > 0
+    assert 0 < blocks.sum() <= sizes.block_capacity < len(blocks)
+    assert sizes.slave_capacity == sizes.block_capacity * sizes.block_size >= found.sum()
+    assert sizes.use_cells and sizes.grid_shape[0] > 1 and sizes.cell_capacity >= 1
     assert sizes.chunk_rows == CHUNK_ROWS
+    binned = sized_bucket_sort(scene.x, scene.surface, radius=scene.radius, sizes=sizes)
+    assert_same_contact(binned, all_to_all(scene.x, scene.surface, radius=scene.radius))
 
 
 def test_an_outline_in_a_wide_box_hashes_its_cells_and_finds_what_all_to_all_does():

@@ -223,10 +223,21 @@ def test_state_is_a_pytree_with_static_sizes():
     leaves, tree = jax.tree.flatten(state)
     rebuilt = jax.tree.unflatten(tree, leaves)
     assert isinstance(rebuilt, SearchState) and rebuilt.sizes == state.sizes
-    assert isinstance(state.sizes, Sizes) and hash(state.sizes) == hash(
-        dataclasses.replace(state.sizes)
-    )
-    assert not any(isinstance(leaf, Sizes) for leaf in leaves)
+    # Static: the sizes are the pytree's structure, not its leaves. Equal
+    # sizes give the same structure (one program), other sizes another
+    # (compiled anew), and a jitted function sees them as Python values.
+    assert not any(isinstance(leaf, (Sizes, int)) for leaf in leaves)
+    same = dataclasses.replace(state, sizes=dataclasses.replace(state.sizes))
+    assert jax.tree.structure(same) == tree
+    more = dataclasses.replace(state.sizes, block_capacity=state.sizes.block_capacity + 1)
+    assert jax.tree.structure(dataclasses.replace(state, sizes=more)) != tree
+
+    @jax.jit
+    def capacity(state):
+        assert isinstance(state.sizes.block_capacity, int)  # not traced
+        return jnp.zeros(state.sizes.slave_capacity)
+
+    assert capacity(state).shape == (state.sizes.slave_capacity,)
     assert hash(search) == hash(Search(radius=RADIUS, skin=SKIN))
 
 
