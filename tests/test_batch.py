@@ -16,6 +16,7 @@ from jaxcontact import (
 from jaxcontact._sizes import measure
 from jaxcontact.scenes import cutting_scene, rough_die_scene
 from tests.helpers import FLOAT, assert_same_contact, assert_same_crossing
+from tests.tolerances import FLOAT64_BATCHED_RTOL, FLOAT64_RTOL
 
 # The tool in, half in and clear of the workpiece: very different needs.
 TIPS = (12.0, 18.0, 20.5)
@@ -192,7 +193,7 @@ def test_gradients_through_a_vmapped_detector_equal_a_loop(detector):
         single = gradient(one, x[i], surface.nodes[i], surface.segments[i])
         assert float(jnp.abs(single[0]).sum()) > 0 and float(jnp.abs(single[1]).sum()) > 0
         for got, want in zip(batched, single, strict=True):
-            np.testing.assert_allclose(got[i], want, rtol=1e-10, atol=1e-12)
+            np.testing.assert_allclose(got[i], want, rtol=FLOAT64_BATCHED_RTOL, atol=FLOAT64_RTOL)
 
 
 def test_nested_vmap_equals_a_double_loop():
