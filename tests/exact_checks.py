@@ -1,7 +1,7 @@
 """Checking a detector's rows against the exact oracle, within stated float bounds.
 
-Shared by the property tests (tests/test_properties.py) and the continuity
-tests (tests/test_continuity.py), on the suite's one scene type
+Shared by the property tests (tests/core/test_properties.py) and the continuity
+tests (tests/core/test_continuity.py), on the suite's one scene type
 (``tests.helpers.Scene``), without a slave mask.
 
 Error bounds (``ULPS`` = 8 units of eps of the dtype):

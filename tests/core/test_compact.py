@@ -27,6 +27,7 @@ from jaxcontact import (
 )
 from jaxcontact._bucket import contact_jit
 from jaxcontact.scenes import cutting_scene, rough_die_scene
+from tests.core.test_search import NUM_STEPS, RADIUS, SKIN, surface_at, trajectory
 from tests.helpers import (
     FLOAT,
     assert_same_contact,
@@ -34,7 +35,6 @@ from tests.helpers import (
     binned_tolerance,
     gradient_atol,
 )
-from tests.test_search import NUM_STEPS, RADIUS, SKIN, surface_at, trajectory
 
 
 def _assert_packed(entries, dense, num_rows: int, flag: str, exact, close):
@@ -203,7 +203,7 @@ def test_readme_compact_snippet_gives_the_dense_forces():
 
     import jaxcontact
 
-    readme = pathlib.Path(__file__).resolve().parent.parent / "README.md"
+    readme = pathlib.Path(__file__).resolve().parents[2] / "README.md"
     section = readme.read_text().split("### The search object")[1].split("\n### ")[0]
     (snippet,) = [s for s in re.findall(r"```python\n(.*?)```", section, re.S) if "compact" in s]
     scene = cutting_scene(2_000, 18.0, dtype=FLOAT)  # the programs of the tests above

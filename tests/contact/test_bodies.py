@@ -327,7 +327,7 @@ def test_the_version_is_the_package_metadata():
     import pathlib
     import re
 
-    pyproject = pathlib.Path(__file__).resolve().parent.parent / "pyproject.toml"
+    pyproject = pathlib.Path(__file__).resolve().parents[2] / "pyproject.toml"
     (version,) = re.findall(r'^version = "([^"]+)"$', pyproject.read_text(), flags=re.M)
     assert jaxcontact.__version__ == version
 

@@ -138,7 +138,7 @@ def test_closest_under_vmap_one_allocation_for_the_batch():
     np.testing.assert_array_equal(state.rebuilds, [1, 1, 1])
 
 
-def test_gradients_equal_all_to_all():  # x64 off: tests/test_grad.py's gradients
+def test_gradients_equal_all_to_all():  # x64 off: tests/core/test_grad.py's gradients
     xs, nodes, segments = trajectory(FLOAT, steps=4, x_tip=19.0)
     search = Search(radius=RADIUS, skin=SKIN, method="binned")
     state = search.allocate(xs[0], surface_at(nodes[0], segments))
@@ -343,7 +343,7 @@ def test_readme_search_snippet_runs():
 
     import jaxcontact
 
-    readme = pathlib.Path(__file__).resolve().parent.parent / "README.md"
+    readme = pathlib.Path(__file__).resolve().parents[2] / "README.md"
     section = readme.read_text().split("### The search object")[1].split("\n### ")[0]
     snippet = re.findall(r"```python\n(.*?)```", section, flags=re.S)[0]
     scene = cutting_scene(2_000, 18.0, x_tip_prev=18.2)

@@ -2,7 +2,7 @@
 
 The one-call forms measure their sizes from concrete data; ``Search`` runs
 the same bucket sort under jit, vmap and grad with sizes allocated outside
-(tests/test_search.py and tests/test_batch.py: steps, scans, batches,
+(tests/core/test_search.py and tests/core/test_batch.py: steps, scans, batches,
 gradients); the sized stages (``tests.helpers.sized_bucket_sort``) run it at
 sizes the test fixes, for the property tests and for sizes starved on purpose.
 """
@@ -89,7 +89,7 @@ SCENES = {
 # rough die's float64 one-call form is its measured sizes (cells) and the
 # sized stage: the chunked search below runs them in float64
 # (test_kept_slaves_searched_in_chunks_..., bucket_sort), and
-# tests/test_properties.py runs the float64 one-call forms with and without
+# tests/core/test_properties.py runs the float64 one-call forms with and without
 # cells against the exact oracle. The float32 rough die (cells) runs with
 # x64 off too; without cells, the one-call forms run with x64 off in
 # test_masks_nan_padding_and_empty_inputs and

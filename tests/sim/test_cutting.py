@@ -134,7 +134,7 @@ def test_the_summary_has_the_keys_a_machinist_reads(coarse_run):
     cut, model, state, record, frames, seconds = coarse_run
     summary = cutting.summary(model, state, record, frames, seconds, 0.0, cutting.MU)
     # The keys the issue asks summary.json for (the demo adds detection_share).
-    from tests.test_cutting_demo import REQUIRED
+    from tests.sim.test_cutting_demo import REQUIRED
 
     assert REQUIRED - {"detection_share"} <= set(summary)
     assert summary["steps"] == int(state.step)
