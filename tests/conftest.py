@@ -22,7 +22,7 @@ floating-point results may differ from the optimised code's in the last
 bits (README, Development, has the measurements). Every test passed so but
 one, whose check depends on the optimised code (two routes of one
 arithmetic agreeing to the last bit): it compiles its program with XLA's
-defaults itself (tests/test_small_paths.py).
+defaults itself (tests/core/test_small_paths.py).
 ``JAXCONTACT_FAST_COMPILE=0`` compiles with XLA's defaults instead;
 ``tests/test_x64_off.py`` runs its pass that way, so that the path most
 users run (x64 off, XLA's default code generation) is tested as they run
@@ -59,7 +59,7 @@ collect_ignore = [] if os.environ.get("JAXCONTACT_SHARDED") == "1" else ["sharde
 jax.config.update("jax_enable_x64", X64)
 jax.config.update("jax_numpy_rank_promotion", "raise")
 
-# Property tests (tests/test_properties.py and others using hypothesis): a
+# Property tests (tests/core/test_properties.py and others using hypothesis): a
 # bounded, reproducible profile for CI; HYPOTHESIS_PROFILE=thorough for a
 # longer search by hand.
 settings.register_profile(
@@ -95,7 +95,7 @@ def pytest_configure(config):
     # jits, cached allocations, scenes of one shape). Whole files per worker
     # instead (``--dist loadfile``), in the order of collection below
     # (``--no-loadscope-reorder``, else xdist puts the files with most tests
-    # first): on 2 cores, tests/test_bucket.py, test_search.py and
+    # first): on 2 cores, tests/core/test_bucket.py, test_search.py and
     # test_compact.py together took 4 min 27 s instead of 7 min 12 s. A
     # ``--dist`` given on the command line is kept.
     if getattr(config.option, "dist", "no") != "load" or hasattr(config, "workerinput"):

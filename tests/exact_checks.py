@@ -1,7 +1,8 @@
 """Checking a detector's rows against the exact oracle, within stated float bounds.
 
-Shared by the property tests (tests/test_properties.py) and the continuity
-tests (tests/test_continuity.py).
+Shared by the property tests (tests/core/test_properties.py) and the continuity
+tests (tests/core/test_continuity.py), on the suite's one scene type
+(``tests.helpers.Scene``), without a slave mask.
 
 Error bounds (``ULPS`` = 8 units of eps of the dtype):
 
@@ -38,36 +39,23 @@ Error bounds (``ULPS`` = 8 units of eps of the dtype):
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 import math
 
 import jax
-import jax.numpy as jnp
 import numpy as np
 
-from jaxcontact import Surface
 from tests import oracle
-from tests.helpers import assert_all_finite
+from tests.helpers import Scene, assert_all_finite
+from tests.tolerances import EXACT_ULPS as ULPS
 
-ULPS = 8
 
-
-@dataclasses.dataclass
-class Scene:
-    """One scene in NumPy, already rounded to its dtype."""
-
-    x_prev: np.ndarray  # f[N, 2]
-    x: np.ndarray  # f[N, 2]
-    nodes: np.ndarray  # f[P, 2]
-    segments: np.ndarray  # i32[M, 2]
-    seg_mask: np.ndarray  # bool[M]
-    radius: float
-
-    def surface(self) -> Surface:
-        return Surface(
-            jnp.asarray(self.nodes), jnp.asarray(self.segments), jnp.asarray(self.seg_mask)
-        )
+def _unmasked(scene: Scene) -> Scene:
+    """``scene`` with its segment mask spelled out; these checks take no slave mask."""
+    assert scene.slave_mask is None, "the exact checks take every slave"
+    if scene.seg_mask is None:
+        scene = scene._replace(seg_mask=np.ones(len(scene.segments), bool))
+    return scene
 
 
 def bound(dtype, scale):
@@ -107,6 +95,7 @@ def _exact_meetings(key):
 def check_contact(contact, scene: Scene, dtype):
     """Every row of ``contact`` against the exact oracle, within the module's bounds."""
     contact = jax.tree.map(np.asarray, contact)  # read row by row: NumPy, not a dispatch each
+    scene = _unmasked(scene)
     assert_all_finite(contact)
     assert not bool(contact.overflow)
     expected, every_pairs = _exact_contacts(
@@ -184,6 +173,7 @@ def fragile(meeting: oracle.ExactMeeting, dtype) -> bool:
 def check_crossing(crossing, scene: Scene, dtype):
     """Every row of ``crossing`` against the exact oracle, within the module's bounds."""
     crossing = jax.tree.map(np.asarray, crossing)
+    scene = _unmasked(scene)
     assert_all_finite(crossing)
     assert not bool(crossing.overflow)
     every_meetings = _exact_meetings(

@@ -1,7 +1,8 @@
 """Per-dtype tolerances and the field-by-field comparison with the oracle.
 
-Every tolerance in the suite comes from here. They are counted in units in
-the last place (ulps) of a length that the test names:
+Every tolerance in the suite comes from tests/tolerances.py (re-exported
+here). The detectors' geometry bounds below are built from its first group,
+counted in units in the last place (ulps) of a length that the test names:
 
 - ``scale``: the size of the local geometry (segment lengths, slave-to-segment
   distances). Gaps, projection coordinates and crossing times are computed
@@ -29,10 +30,8 @@ from jaxcontact._query.closest import CLOSEST
 from jaxcontact._query.swept import SWEPT
 from jaxcontact.forces import penalty
 from tests.oracle import OracleContact, OracleCrossing, oracle_contact, oracle_crossing
-
-# Ulps of the local scale allowed for values built from a handful of
-# operations on differences of the inputs.
-LOCAL_ULPS = {np.dtype(np.float32): 8, np.dtype(np.float64): 8}
+from tests.tolerances import *  # noqa: F403 (the table, re-exported)
+from tests.tolerances import BINNED_ULPS, GRADIENT_EPS, LOCAL_ULPS
 
 FLOAT_DTYPES = (np.float32, np.float64)
 
@@ -58,8 +57,8 @@ def local_atol(dtype, scale: float = 1.0) -> float:
 def gradient_atol(dtype) -> float:
     """Gradients of the same pair from two compiled programs (a detector and
     the dense one), which contract into fused multiply-adds differently:
-    4,500 eps, 1e-12 in float64."""
-    return 4500 * eps(dtype)
+    ``GRADIENT_EPS`` eps, 1e-12 in float64."""
+    return GRADIENT_EPS * eps(dtype)
 
 
 def coordinate_ulp(dtype, offset: float) -> float:
@@ -142,7 +141,11 @@ def assert_crossing_matches(
 
 
 class Scene(NamedTuple):
-    """A random scene in NumPy, already in its dtype; masks may be None."""
+    """The suite's one scene type: NumPy, already in its dtype; masks may be None.
+
+    The library's ``jaxcontact.scenes.Scene`` holds a ``Surface`` of device
+    arrays and no slave mask; the oracle and the checks read NumPy rows.
+    """
 
     x_prev: np.ndarray  # f[N, 2]
     x: np.ndarray  # f[N, 2]
@@ -338,7 +341,9 @@ def binned_tolerance(dtype, points):
     fusions, so the same kernel on the same pair may round differently in the
     dense and the binned program.
     """
-    return 16 * float(jnp.finfo(dtype).eps) * (1 + float(jnp.max(jnp.abs(points), initial=0)))
+    return (
+        BINNED_ULPS * float(jnp.finfo(dtype).eps) * (1 + float(jnp.max(jnp.abs(points), initial=0)))
+    )
 
 
 def assert_same_contact(binned, dense, radius=None, degenerate=False):

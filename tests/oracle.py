@@ -505,7 +505,7 @@ def oracle_crossing(
     return result
 
 
-# Per-pair exact quantities for the property tests (tests/test_properties.py),
+# Per-pair exact quantities for the property tests (tests/core/test_properties.py),
 # which need more than the winner: how far every other segment is, and how
 # close each decision was to going the other way.
 

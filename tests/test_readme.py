@@ -95,7 +95,7 @@ def test_readme_simulation_snippet_runs():
 def test_readme_cutting_snippet_runs():
     # The snippet as written, its last line's gradient taken as a value: the
     # same run's gradient is checked against finite differences in float64 by
-    # tests/test_cutting.py, and compiling it again in float32 here would
+    # tests/sim/test_cutting.py, and compiling it again in float32 here would
     # double CI's longest compile.
     section = README.read_text().split("### Orthogonal cutting")[1].split("\n### ")[0]
     (snippet,) = re.findall(r"```python\n(.*?)```", section, flags=re.S)

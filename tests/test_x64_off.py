@@ -10,9 +10,10 @@ tests/conftest.py): every detector
 (``all_to_all``, ``swept``, ``bucket_sort``, ``bucket_swept``), the
 ``Search`` object, the validation
 errors and the dtype rules, with the tests that need float64 skipped
-(conftest.py) and the sweeps over random scenes' sizes (tests/test_all_to_all.py,
-tests/test_swept.py) at their largest size only. Gradients and transforms (tests/test_grad.py,
-tests/test_transforms.py) run with x64 on only since 0.4.0, to keep CI
+(conftest.py) and the sweeps over random scenes' sizes
+(tests/core/test_all_to_all.py, tests/core/test_swept.py) at their largest
+size only. Gradients and transforms (tests/core/test_grad.py,
+tests/core/test_transforms.py) run with x64 on only since 0.4.0, to keep CI
 under its ceiling; their float32 programs are the same but for index dtypes. By hand, the same:
 ``JAXCONTACT_X64=0 python -m pytest -q -n 2 -m x64_off``; the whole suite
 that way: ``JAXCONTACT_X64=0 python -m pytest -q -n 2``.

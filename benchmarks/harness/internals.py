@@ -41,7 +41,6 @@ from jaxcontact._timing import (
 )
 from jaxcontact._types import Contact
 
-
 # The two drivers' jitted programs (one cache each, shared by both queries).
 exhaustive = driver.exhaustive
 sized_jit = driver.sized_jit

@@ -26,6 +26,7 @@ from jaxcontact._query.closest import CLOSEST
 from jaxcontact._types import CELLS_ABOVE
 from jaxcontact.scenes import cutting_scene, rough_die_scene
 from tests.helpers import assert_same_contact, assert_same_crossing, penalty_total
+from tests.tolerances import FLOAT64_EXACT_ATOL, FLOAT64_RTOL
 
 DEVICES = 4
 RADIUS = 0.1
@@ -134,12 +135,12 @@ def test_tool_force_is_a_collective_sum_equal_to_one_device(mesh):
     part = penalty_total(
         all_to_all(scene.x[:rows], scene.surface, radius=RADIUS), scene.surface, 1e3
     )[1]
-    np.testing.assert_allclose(explicit(x, scene.surface)[1], part, rtol=1e-12)
+    np.testing.assert_allclose(explicit(x, scene.surface)[1], part, rtol=FLOAT64_RTOL)
 
     # Implicitly: jit over a sharded result; XLA's partitioner adds the all-reduce.
     contact = jax.jit(sharded(all_to_all, mesh))(scene.x, scene.surface, radius=RADIUS, mask=mask)
     total = jax.jit(lambda c: penalty_total(c, scene.surface, 1e3)[1])(contact)
-    np.testing.assert_allclose(total, one, rtol=1e-12)
+    np.testing.assert_allclose(total, one, rtol=FLOAT64_RTOL)
 
 
 @pytest.mark.x64
@@ -153,7 +154,7 @@ def test_gradients_through_the_sharded_detector_equal_one_device(mesh):
     one = jax.grad(functools.partial(energy, detect=all_to_all))(scene.x)
     split = jax.jit(jax.grad(functools.partial(energy, detect=sharded(all_to_all, mesh))))(scene.x)
     assert float(jnp.abs(one).sum()) > 0
-    np.testing.assert_allclose(split, one, rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(split, one, rtol=FLOAT64_RTOL, atol=FLOAT64_EXACT_ATOL)
 
 
 @pytest.mark.parametrize("num_rows", [0, 3])

@@ -20,6 +20,7 @@ from jaxcontact._pipeline.outline import chains
 from jaxcontact._pipeline.segments import resolve_segments
 from tests.helpers import FLOAT, local_atol
 from tests.oracle import closest_point, oracle_chains, oracle_contact, oracle_crossing
+from tests.tolerances import FD_ATOL, FD_RTOL, FD_STEP, FLOAT32_SUM_ATOL, FLOAT32_SUM_RTOL
 
 
 def ring(count: int, radius: float, centre, phase: float = 0.0) -> np.ndarray:
@@ -217,8 +218,12 @@ def test_chains_give_arc_length_along_every_outline_in_any_order():
         np.testing.assert_array_equal(np.asarray(got.chain)[real] == int(got.chain[i]), same)
         # u runs from the chain's end: the oracle's s from its start.
         total = np.asarray(got.high)[real][same].max()
-        np.testing.assert_allclose(total - float(got.high[i]), expected.s_start[i], atol=1e-5)
-    np.testing.assert_allclose(np.asarray(got.loop)[real], expected.loop[real], rtol=1e-5)
+        np.testing.assert_allclose(
+            total - float(got.high[i]), expected.s_start[i], atol=FLOAT32_SUM_ATOL
+        )
+    np.testing.assert_allclose(
+        np.asarray(got.loop)[real], expected.loop[real], rtol=FLOAT32_SUM_RTOL
+    )
     assert np.isinf(expected.loop[real]).sum() == 6 + 3  # the cut loop and the open chain
 
 
@@ -244,7 +249,7 @@ def test_gradients_with_both_bodies_deformable_are_finite_and_match_finite_diffe
     first = np.asarray(slave_body) == 0
     assert float(jnp.abs(grad[first]).max()) > 0 and float(jnp.abs(grad[~first]).max()) > 0
     if FLOAT is np.float64:
-        check_grads(energy, (x,), order=1, modes=["rev"], eps=1e-6, atol=1e-5, rtol=1e-4)
+        check_grads(energy, (x,), order=1, modes=["rev"], eps=FD_STEP, atol=FD_ATOL, rtol=FD_RTOL)
 
 
 def test_pair_keywords_under_vmap_and_lax_scan_in_a_search():
@@ -330,7 +335,7 @@ def test_the_version_is_the_package_metadata():
     import pathlib
     import re
 
-    pyproject = pathlib.Path(__file__).resolve().parent.parent / "pyproject.toml"
+    pyproject = pathlib.Path(__file__).resolve().parents[2] / "pyproject.toml"
     (version,) = re.findall(r'^version = "([^"]+)"$', pyproject.read_text(), flags=re.M)
     assert jaxcontact.__version__ == version
 

@@ -17,6 +17,7 @@ from jaxcontact import _cli
 from jaxcontact.scenes import cutting_tool_outline
 from jaxcontact.sim import mean_cutting_force, ploughing, run, simulate, tool_outline
 from jaxcontact.sim.demo import run_demo
+from tests.tolerances import FLOAT64_RTOL, FLOAT64_STEPS_RTOL, RERUN_ATOL
 
 pytestmark = [pytest.mark.simulation, pytest.mark.slow, pytest.mark.x64]
 
@@ -40,7 +41,7 @@ def test_tool_outline_is_the_cutting_scenes():
             tool_outline(jnp.float64(x_tip), jnp.float64(math.radians(10))),
             cutting_tool_outline(x_tip),
             rtol=0,
-            atol=1e-12,
+            atol=FLOAT64_RTOL,
         )
 
 
@@ -123,7 +124,9 @@ def test_reuse_surface_slaves_and_growing_sizes_change_nothing(small):
     assert 1 <= int(final.rebuilds) <= config.steps // 3
     assert int(final.rebuilds) == history_again.rebuilt.sum()
     np.testing.assert_array_equal(history_again.active, history.active)
-    np.testing.assert_allclose(history_again.force, history.force, rtol=1e-9, atol=1e-6)
+    np.testing.assert_allclose(
+        history_again.force, history.force, rtol=FLOAT64_STEPS_RTOL, atol=RERUN_ATOL
+    )
 
 
 def test_gradient_matches_central_differences(small):

@@ -2,7 +2,7 @@
 
 The one-call forms measure their sizes from concrete data; ``Search`` runs
 the same bucket sort under jit, vmap and grad with sizes allocated outside
-(tests/test_search.py and tests/test_batch.py: steps, scans, batches,
+(tests/core/test_search.py and tests/core/test_batch.py: steps, scans, batches,
 gradients); the sized stages (``tests.helpers.sized_bucket_sort``) run it at
 sizes the test fixes, for the property tests and for sizes starved on purpose.
 """
@@ -91,7 +91,7 @@ SCENES = {
 # rough die's float64 one-call form is its measured sizes (cells) and the
 # sized stage: the chunked search below runs them in float64
 # (test_kept_slaves_searched_in_chunks_..., bucket_sort), and
-# tests/test_properties.py runs the float64 one-call forms with and without
+# tests/core/test_properties.py runs the float64 one-call forms with and without
 # cells against the exact oracle. The float32 rough die (cells) runs with
 # x64 off too; without cells, the one-call forms run with x64 off in
 # test_masks_nan_padding_and_empty_inputs and
@@ -324,12 +324,19 @@ def test_bucket_swept_equals_swept_on_random_polylines(scaled_scene, move, bucke
 
 
 def test_sizes_fields():
+    # The fields against the scene they were measured on, counted here: the
+    # kept blocks hold every block of consecutive rows with a slave in reach.
     scene = rough_die_scene(4_000, 400)
     sizes = measure(scene.x, scene.surface, radius=scene.radius)
-    assert isinstance(sizes, Sizes)
-    assert sizes.slave_capacity == sizes.block_capacity * sizes.block_size
-    assert sizes.grid_shape[0] > 1 and sizes.cell_capacity >= 1
+    assert isinstance(sizes, Sizes) and sizes.num_slaves == scene.x.shape[0]
+    found = np.asarray(all_to_all(scene.x, scene.surface, radius=scene.radius).found)
+    blocks = np.add.reduceat(found, np.arange(0, len(found), sizes.block_size)) > 0
+    assert 0 < blocks.sum() <= sizes.block_capacity < len(blocks)
+    assert sizes.slave_capacity == sizes.block_capacity * sizes.block_size >= found.sum()
+    assert sizes.use_cells and sizes.grid_shape[0] > 1 and sizes.cell_capacity >= 1
     assert sizes.chunk_rows == CHUNK_ROWS
+    binned = sized_bucket_sort(scene.x, scene.surface, radius=scene.radius, sizes=sizes)
+    assert_same_contact(binned, all_to_all(scene.x, scene.surface, radius=scene.radius))
 
 
 def test_an_outline_in_a_wide_box_hashes_its_cells_and_finds_what_all_to_all_does():

@@ -19,6 +19,7 @@ import pytest
 import jaxcontact
 from jaxcontact import Search, Surface, all_to_all
 from jaxcontact._track import WALK
+from tests.tolerances import FLOAT32_ATOL, SLIP_ATOL
 
 DEPTH = 0.01  # slaves sit this far inside the outline: in contact
 RADIUS = 0.05
@@ -176,7 +177,7 @@ def test_plain_track_equals_the_search_and_forget_drops_rows():
     last = all_to_all(xs[0], one(0), radius=RADIUS)
     now = all_to_all(xs[1], one(1), radius=RADIUS)
     plain = jaxcontact.track(last, now, one(1))
-    np.testing.assert_allclose(np.asarray(plain.slip), slips[0], atol=2e-5)
+    np.testing.assert_allclose(np.asarray(plain.slip), slips[0], atol=SLIP_ATOL)
     search = Search(radius=RADIUS, method="exhaustive", track=True)
     state = search.allocate(xs[0], one(0))
     _, state, _ = search.closest(state, xs[0], one(0))
@@ -185,7 +186,9 @@ def test_plain_track_equals_the_search_and_forget_drops_rows():
     _, _, slip = search.closest(state, xs[1], one(1))
     assert not bool(slip.persisted[rows].any()) and bool(slip.persisted[~rows].all())
     np.testing.assert_array_equal(np.asarray(slip.slip[rows]), 0)
-    np.testing.assert_allclose(np.asarray(slip.slip[~rows]), slips[0][~np.asarray(rows)], atol=2e-5)
+    np.testing.assert_allclose(
+        np.asarray(slip.slip[~rows]), slips[0][~np.asarray(rows)], atol=SLIP_ATOL
+    )
     with pytest.raises(ValueError, match="rows must have shape"):
         state.forget(jnp.ones(3, bool))
     with pytest.raises(ValueError, match="no slip history"):
@@ -209,7 +212,7 @@ def test_rows_not_found_hold_zeros_and_batches_map():
     assert not bool(slip.persisted[0, 0]) and bool(slip.persisted[1, 0])
     np.testing.assert_array_equal(np.asarray(slip.anchor[0, 0]), 0)
     assert float(slip.slip[0, 0]) == 0.0
-    np.testing.assert_allclose(np.asarray(slip.slip[1]), 0, atol=1e-6)  # nothing moved
+    np.testing.assert_allclose(np.asarray(slip.slip[1]), 0, atol=FLOAT32_ATOL)  # nothing moved
 
 
 def test_a_regrown_state_keeps_its_history_and_bad_states_are_refused():
@@ -224,7 +227,7 @@ def test_a_regrown_state_keeps_its_history_and_bad_states_are_refused():
     )
     _, _, slip = search.closest(grown, xs[1], one(1))
     assert bool(slip.persisted.all())
-    np.testing.assert_allclose(np.asarray(slip.slip), slips[0], atol=2e-5)
+    np.testing.assert_allclose(np.asarray(slip.slip), slips[0], atol=SLIP_ATOL)
     with pytest.raises(ValueError, match="slip history has shape"):
         search.closest(state, xs[1][:5], one(1))
     with pytest.raises(ValueError, match="no slip history"):
@@ -255,11 +258,13 @@ def test_many_rows_are_worked_on_compacted_or_all_alike(found_rows):
     slip = jaxcontact.track(last, now, one(1))
     expected = np.zeros(num_rows)
     expected[: copies * len(SLIDES)] = np.tile(slips[0], copies)
-    np.testing.assert_allclose(np.asarray(slip.slip), expected, atol=2e-5)
+    np.testing.assert_allclose(np.asarray(slip.slip), expected, atol=SLIP_ATOL)
     assert int(slip.persisted.sum()) == copies * len(SLIDES)
     rows = slice(0, len(SLIDES))
-    np.testing.assert_allclose(np.asarray(now.normal[rows]), np.asarray(small.normal), atol=1e-6)
-    np.testing.assert_allclose(np.asarray(now.gap[rows]), np.asarray(small.gap), atol=1e-6)
+    np.testing.assert_allclose(
+        np.asarray(now.normal[rows]), np.asarray(small.normal), atol=FLOAT32_ATOL
+    )
+    np.testing.assert_allclose(np.asarray(now.gap[rows]), np.asarray(small.gap), atol=FLOAT32_ATOL)
     np.testing.assert_array_equal(np.asarray(now.normal[copies * len(SLIDES) :]), 0)
 
 
@@ -274,6 +279,6 @@ def test_slip_gradients_are_finite_with_padding_and_zero_length_segments():
         now = all_to_all(jnp.array([[0.7, -0.01]]), surface, radius=0.1)
         return jaxcontact.track(last, now, surface).slip[0]
 
-    assert float(slid(nodes)) == pytest.approx(0.5, abs=1e-6)
+    assert float(slid(nodes)) == pytest.approx(0.5, abs=FLOAT32_ATOL)
     grad = np.asarray(jax.grad(slid)(nodes))
     assert np.isfinite(grad).all() and np.abs(grad).sum() > 0

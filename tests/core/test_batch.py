@@ -4,6 +4,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from jax.extend.core import Jaxpr
 
 from jaxcontact import (
     Search,
@@ -14,6 +15,7 @@ from jaxcontact import (
 from jaxcontact._pipeline.sizes import measure
 from jaxcontact.scenes import cutting_scene, rough_die_scene
 from tests.helpers import FLOAT, assert_same_contact, assert_same_crossing, penalty_total
+from tests.tolerances import FLOAT64_BATCHED_RTOL, FLOAT64_RTOL
 
 # The tool in, half in and clear of the workpiece: very different needs.
 TIPS = (12.0, 18.0, 20.5)
@@ -190,7 +192,7 @@ def test_gradients_through_a_vmapped_detector_equal_a_loop(detector):
         single = gradient(one, x[i], surface.nodes[i], surface.segments[i])
         assert float(jnp.abs(single[0]).sum()) > 0 and float(jnp.abs(single[1]).sum()) > 0
         for got, want in zip(batched, single, strict=True):
-            np.testing.assert_allclose(got[i], want, rtol=1e-10, atol=1e-12)
+            np.testing.assert_allclose(got[i], want, rtol=FLOAT64_BATCHED_RTOL, atol=FLOAT64_RTOL)
 
 
 def test_nested_vmap_equals_a_double_loop():
@@ -205,17 +207,57 @@ def test_nested_vmap_equals_a_double_loop():
             np.testing.assert_array_equal(outer.gap[j, i], one.gap)
 
 
+def _scan_lengths(jaxpr) -> list[int]:
+    """The length of every ``scan`` in ``jaxpr`` and the programs it calls."""
+    lengths = []
+    for eqn in jaxpr.eqns:
+        if eqn.primitive.name == "scan":
+            lengths.append(eqn.params["length"])
+        for param in eqn.params.values():
+            for sub in param if isinstance(param, (tuple, list)) else (param,):
+                inner = getattr(sub, "jaxpr", sub)
+                if isinstance(inner, Jaxpr):
+                    lengths += _scan_lengths(inner)
+    return lengths
+
+
 def test_searches_batch_as_usual_off_the_cpu(monkeypatch):
-    # On an accelerator the searches are vmapped like everything else; the
-    # answer is the same. (The backend is faked: CI has only a CPU.)
+    # On an accelerator the searches are vmapped like everything else (one
+    # batched program); on the CPU they run scene by scene, a ``lax.map``:
+    # a scan over the batch. The answers are the same, so the programs
+    # themselves are compared. (The backend is faked: CI has only a CPU.)
+    # JAX keeps a batched program per shape whatever the backend, so each
+    # backend traces at a shape of its own that no other test batches.
     import jaxcontact._pipeline.lowest
 
     scenes, x_prev, x, surface, mask = _batch()
-    expected = jax.vmap(lambda x, s, m: all_to_all(x, s, radius=RADIUS, mask=m))(x, surface, mask)
-    paths = jax.vmap(lambda p, x, s: swept(p, x, s))(x_prev, x, surface)
-    monkeypatch.setattr(jaxcontact._pipeline.lowest.jax, "default_backend", lambda: "gpu")
-    got = jax.vmap(lambda x, s, m: all_to_all(x, s, radius=RADIUS, mask=m))(x, surface, mask)
-    np.testing.assert_array_equal(got.segment, expected.segment)
-    np.testing.assert_array_equal(got.gap, expected.gap)
-    got_paths = jax.vmap(lambda p, x, s: swept(p, x, s))(x_prev, x, surface)
-    np.testing.assert_array_equal(got_paths.t, paths.t)
+    batch = len(scenes)
+
+    def contacts(x, s, m):
+        return all_to_all(x, s, radius=RADIUS, mask=m)
+
+    def paths(p, x, s):
+        return swept(p, x, s)
+
+    def programs(rows):
+        x_, p_, m_ = x[:, :rows], x_prev[:, :rows], mask[:, :rows]
+        return [
+            jax.make_jaxpr(jax.vmap(contacts))(x_, surface, m_).jaxpr,
+            jax.make_jaxpr(jax.vmap(paths))(p_, x_, surface).jaxpr,
+        ]
+
+    rows = x.shape[1] - 7
+    for program in programs(rows - 1):
+        assert batch in _scan_lengths(program)
+    x_prev, x, mask = x_prev[:, :rows], x[:, :rows], mask[:, :rows]
+    with monkeypatch.context() as patch:
+        patch.setattr(jaxcontact._pipeline.lowest.jax, "default_backend", lambda: "gpu")
+        for program in programs(rows):
+            assert batch not in _scan_lengths(program)
+        got = jax.vmap(contacts)(x, surface, mask)
+        got_paths = jax.vmap(paths)(x_prev, x, surface)
+    for i, scene in enumerate(scenes):
+        one = contacts(x[i], scene.surface, mask[i])
+        np.testing.assert_array_equal(got.segment[i], one.segment)
+        np.testing.assert_array_equal(got.gap[i], one.gap)
+        np.testing.assert_array_equal(got_paths.t[i], paths(x_prev[i], x[i], scene.surface).t)

@@ -90,7 +90,7 @@ def test_readme_validate_example_runs():
     import doctest
     import pathlib
 
-    readme = (pathlib.Path(__file__).resolve().parent.parent / "README.md").read_text()
+    readme = (pathlib.Path(__file__).resolve().parents[2] / "README.md").read_text()
     section = readme.split("### Checking inputs: `validate`")[1].split("\n### ")[0]
     (example,) = re.findall(r"```python\n(.*?)```", section, flags=re.S)
     test = doctest.DocTestParser().get_doctest(example, {}, "README validate", None, 0)

@@ -10,6 +10,7 @@ import pytest
 import jaxcontact
 from jaxcontact.scenes import cutting_scene, cutting_tool_outline, paper_scene, rough_die_scene
 from tests import helpers
+from tests.tolerances import FLOAT32_SUM_ATOL, FLOAT64_RTOL
 
 DTYPES = pytest.mark.parametrize("dtype", helpers.FLOAT_DTYPES, ids=lambda d: np.dtype(d).name)
 
@@ -52,7 +53,9 @@ def test_cutting_scene_shapes(num_nodes):
     assert scene.radius == 0.1
     # The tool moved by -0.5 in x: seen from it, the nodes were 0.5 further left.
     np.testing.assert_allclose(
-        np.asarray(scene.x) - np.asarray(scene.x_prev), [[0.5, 0.0]] * (nx * ny), atol=1e-5
+        np.asarray(scene.x) - np.asarray(scene.x_prev),
+        [[0.5, 0.0]] * (nx * ny),
+        atol=FLOAT32_SUM_ATOL,
     )
     assert not np.any(np.asarray(cutting_scene(num_nodes, 18.0).x) - np.asarray(scene.x))
 
@@ -69,7 +72,9 @@ def test_rough_die_scene_shapes_and_upward_normals(num_nodes, num_segments):
     assert scene.surface.nodes.shape == (num_segments + 1, 2)
     assert scene.radius == 0.02
     nodes = np.asarray(scene.surface.nodes)
-    np.testing.assert_allclose(nodes[:, 1], 0.1 * np.sin(2 * np.pi * nodes[:, 0]), atol=1e-12)
+    np.testing.assert_allclose(
+        nodes[:, 1], 0.1 * np.sin(2 * np.pi * nodes[:, 0]), atol=FLOAT64_RTOL
+    )
     segments = np.asarray(scene.surface.segments)
     tangent = nodes[segments[:, 1]] - nodes[segments[:, 0]]
     normal = np.stack([tangent[:, 1], -tangent[:, 0]], axis=-1)
@@ -128,24 +133,37 @@ def paper_crossings_in_closed_form(x_prev: np.ndarray, x: np.ndarray):
 
 
 def paper_crossings(n, dtype):
+    """swept on the paper's scene, the exact oracle's answer on the same
+    (rounded) arrays, and the closed form of the paper's geometry."""
     scene = paper_scene(n, length=10.0, d=5.0, dtype=dtype)
     crossing = jax.jit(jaxcontact.swept)(scene.x_prev, scene.x, scene.surface)
     x_prev, x = np.asarray(scene.x_prev, np.float64), np.asarray(scene.x, np.float64)
-    return crossing, x_prev, x, paper_crossings_in_closed_form(x_prev, x)
+    surface = scene.surface
+    expected = helpers.crossing_oracle(
+        helpers.Scene(
+            np.asarray(scene.x_prev), np.asarray(scene.x), np.asarray(surface.nodes),
+            np.asarray(surface.segments), None, None, scene.radius,
+        )
+    )  # fmt: skip
+    return crossing, expected, paper_crossings_in_closed_form(x_prev, x)
 
 
 @DTYPES
 @pytest.mark.parametrize("n", [30, 99])
 def test_paper_scene_crossings_match_closed_form(n, dtype):
-    crossing, x_prev, x, (crossed, _, t) = paper_crossings(n, dtype)
-    np.testing.assert_array_equal(crossing.crossed, crossed)
+    # The detector against the oracle; the oracle, on the rounded scene,
+    # against the paper's geometry in closed form.
+    crossing, expected, (crossed, _, t) = paper_crossings(n, dtype)
+    np.testing.assert_array_equal(crossing.crossed, expected.crossed)
+    np.testing.assert_array_equal(expected.crossed, crossed)
     assert crossed.sum() > 10
     # t is 1 / |path| of the tool's size 10; the float32 tool nodes are rounded
     # near 50, which moves a face by ~1 ulp of 50 (< 8 ulps of 10).
-    np.testing.assert_allclose(crossing.t, t, rtol=0, atol=helpers.local_atol(dtype, 10.0))
-    point = np.where(crossed[:, None], x_prev + t[:, None] * (x - x_prev), 0.0)
+    atol = helpers.local_atol(dtype, 10.0)
+    np.testing.assert_allclose(expected.t, t, rtol=0, atol=atol)
+    np.testing.assert_allclose(crossing.t, expected.t, rtol=0, atol=atol)
     atol = helpers.local_atol(dtype, 10.0) * 5 + helpers.coordinate_ulp(dtype, 50.0)
-    np.testing.assert_allclose(crossing.point, point, rtol=0, atol=atol)
+    np.testing.assert_allclose(crossing.point, expected.point, rtol=0, atol=atol)
 
 
 @DTYPES
@@ -154,6 +172,7 @@ def test_paper_scene_crossings_match_closed_form(n, dtype):
 # (A regression test: this once went to the clearance face.)
 @pytest.mark.parametrize("n", [30, 99])
 def test_paper_scene_crossings_are_on_the_rake_face_where_it_is_met_first(n, dtype):
-    crossing, _, _, (crossed, segment, _) = paper_crossings(n, dtype)
+    crossing, expected, (crossed, segment, _) = paper_crossings(n, dtype)
     assert np.all(segment[crossed] == 0)  # the closed form: the rake is always met first
-    np.testing.assert_array_equal(crossing.segment, segment)
+    np.testing.assert_array_equal(expected.segment, segment)
+    np.testing.assert_array_equal(crossing.segment, expected.segment)

@@ -138,7 +138,7 @@ def test_closest_under_vmap_one_allocation_for_the_batch():
     np.testing.assert_array_equal(state.rebuilds, [1, 1, 1])
 
 
-def test_gradients_equal_all_to_all():  # x64 off: tests/test_grad.py's gradients
+def test_gradients_equal_all_to_all():  # x64 off: tests/core/test_grad.py's gradients
     xs, nodes, segments = trajectory(FLOAT, steps=4, x_tip=19.0)
     search = Search(radius=RADIUS, skin=SKIN, method="binned")
     state = search.allocate(xs[0], surface_at(nodes[0], segments))
@@ -223,10 +223,21 @@ def test_state_is_a_pytree_with_static_sizes():
     leaves, tree = jax.tree.flatten(state)
     rebuilt = jax.tree.unflatten(tree, leaves)
     assert isinstance(rebuilt, SearchState) and rebuilt.sizes == state.sizes
-    assert isinstance(state.sizes, Sizes) and hash(state.sizes) == hash(
-        dataclasses.replace(state.sizes)
-    )
-    assert not any(isinstance(leaf, Sizes) for leaf in leaves)
+    # Static: the sizes are the pytree's structure, not its leaves. Equal
+    # sizes give the same structure (one program), other sizes another
+    # (compiled anew), and a jitted function sees them as Python values.
+    assert not any(isinstance(leaf, (Sizes, int)) for leaf in leaves)
+    same = dataclasses.replace(state, sizes=dataclasses.replace(state.sizes))
+    assert jax.tree.structure(same) == tree
+    more = dataclasses.replace(state.sizes, block_capacity=state.sizes.block_capacity + 1)
+    assert jax.tree.structure(dataclasses.replace(state, sizes=more)) != tree
+
+    @jax.jit
+    def capacity(state):
+        assert isinstance(state.sizes.block_capacity, int)  # not traced
+        return jnp.zeros(state.sizes.slave_capacity)
+
+    assert capacity(state).shape == (state.sizes.slave_capacity,)
     assert hash(search) == hash(Search(radius=RADIUS, skin=SKIN))
 
 
@@ -332,7 +343,7 @@ def test_readme_search_snippet_runs():
 
     import jaxcontact
 
-    readme = pathlib.Path(__file__).resolve().parent.parent / "README.md"
+    readme = pathlib.Path(__file__).resolve().parents[2] / "README.md"
     section = readme.read_text().split("### The search object")[1].split("\n### ")[0]
     snippet = re.findall(r"```python\n(.*?)```", section, flags=re.S)[0]
     scene = cutting_scene(2_000, 18.0, x_tip_prev=18.2)

@@ -19,6 +19,7 @@ import pytest
 
 import jaxcontact
 from jaxcontact.forces import Friction, coulomb
+from tests.tolerances import CLOSED_FORM_RTOL, FD_HISTORY_RTOL
 
 pytestmark = pytest.mark.x64
 
@@ -58,8 +59,8 @@ def test_the_friction_force_differentiates_through_the_history(mu):
     difference = (value_and_grad(speed + step, mu)[0] - value_and_grad(speed - step, mu)[0]) / (
         2 * step
     )
-    np.testing.assert_allclose(float(gradient), float(difference), rtol=1e-6)
+    np.testing.assert_allclose(float(gradient), float(difference), rtol=FD_HISTORY_RTOL)
     if mu == 50.0:
         # Sticking: the spring holds -k_t times the distance, summed over the steps.
         expected = -50.0 * sum(range(STEPS))
-        np.testing.assert_allclose(float(gradient), expected, rtol=1e-9)
+        np.testing.assert_allclose(float(gradient), expected, rtol=CLOSED_FORM_RTOL)

@@ -7,6 +7,7 @@ Each program XLA compiles maps hundreds of memory regions into the process
 import jax
 import numpy as np
 import pytest
+from jax.extend.core import Jaxpr
 
 from jaxcontact import Surface, all_to_all, bucket_sort, bucket_swept, swept
 from jaxcontact._pipeline import driver
@@ -77,11 +78,31 @@ def test_padding_is_cut_back_and_keeps_dtypes_and_overflow():
     assert contact.overflow.shape == ()
 
 
+def _shapes(jaxpr) -> set[tuple[int, ...]]:
+    """Every shape of a value in ``jaxpr`` and the programs it calls."""
+    shapes = set()
+    for eqn in jaxpr.eqns:
+        for var in (*eqn.invars, *eqn.outvars):
+            shapes.add(tuple(getattr(var.aval, "shape", ())))
+        for param in eqn.params.values():
+            for sub in param if isinstance(param, (tuple, list)) else (param,):
+                inner = getattr(sub, "jaxpr", sub)
+                if isinstance(inner, Jaxpr):
+                    shapes |= _shapes(inner)
+    return shapes
+
+
 def test_traced_calls_are_not_padded():
+    # Padding is cut back, so the values alone cannot tell: the traced
+    # program's shapes must be the caller's (3 rows, 3 segments, 4 nodes),
+    # never a size class (16 rows, 8 segments and nodes).
     x = np.array([[1.5, 0.2], [0.5, -0.1], [2.5, 0.3]])
-    traced = jax.jit(lambda x: all_to_all(x, Surface(NODES, SEGMENTS), radius=0.3).gap)(x)
+    traced = jax.make_jaxpr(lambda x: all_to_all(x, Surface(NODES, SEGMENTS), radius=0.3).gap)(x)
+    dims = {dim for shape in _shapes(traced.jaxpr) for dim in shape}
+    assert 3 in dims and not dims & {8, 16}, sorted(dims)
+    gap = jax.jit(lambda x: all_to_all(x, Surface(NODES, SEGMENTS), radius=0.3).gap)(x)
     plain = all_to_all(x, Surface(NODES, SEGMENTS), radius=0.3).gap
-    np.testing.assert_array_equal(traced, plain)
+    np.testing.assert_array_equal(gap, plain)
 
 
 @pytest.mark.parametrize("query", ["closest", "swept"])

@@ -12,6 +12,7 @@ from jaxcontact._pipeline.lowest import lowest_score
 from jaxcontact.scenes import paper_scene
 from tests import helpers
 from tests.oracle import oracle_contact
+from tests.tolerances import FLOAT32_RTOL, FLOAT32_SUM_RTOL
 
 # All of this file runs again with x64 off (tests/test_x64_off.py), the
 # sweep over random scenes' sizes at one size.
@@ -57,7 +58,7 @@ def checked_scene(scene: helpers.Scene, **tolerance):
 # and in test_transforms.py): each size is a compilation. With x64 off
 # (tests/test_x64_off.py), the largest only: what x64 changes is the index
 # dtypes, not the shapes, and empty inputs run with x64 off in
-# tests/test_validation.py.
+# tests/core/test_validation.py.
 @pytest.mark.parametrize(
     "num_slaves, num_segments",
     [
@@ -173,8 +174,8 @@ def test_slave_on_the_bisector_beyond_a_sharp_convex_corner_is_outside(dtype):
         slave = off_bisector(tip, rake_end, clearance_end, distance=0.5, share=share)
         contact = all_to_all(jnp.asarray([slave], dtype), tool, radius=1.0)
         assert bool(contact.found[0]) and not bool(contact.active[0])
-        np.testing.assert_allclose(contact.gap[0], 0.5, rtol=1e-5)
-        np.testing.assert_allclose(contact.point[0], tip, rtol=1e-6)
+        np.testing.assert_allclose(contact.gap[0], 0.5, rtol=FLOAT32_SUM_RTOL)
+        np.testing.assert_allclose(contact.point[0], tip, rtol=FLOAT32_RTOL)
 
 
 # Regression (found by this suite): a slave exactly on the vertex V shared by

@@ -13,7 +13,6 @@ tests/exact_checks.py. Hypothesis settings come from the profile in tests/confte
 
 from __future__ import annotations
 
-import dataclasses
 import math
 
 import jax
@@ -26,8 +25,15 @@ from hypothesis import strategies as st
 import jaxcontact
 from jaxcontact import Sizes, Surface
 from tests import oracle
-from tests.exact_checks import ULPS, Scene, check_contact, check_crossing
-from tests.helpers import assert_all_finite, blind_spot, sized_bucket_sort, sized_bucket_swept
+from tests.exact_checks import ULPS, check_contact, check_crossing
+from tests.helpers import (
+    Scene,
+    assert_all_finite,
+    blind_spot,
+    sized_bucket_sort,
+    sized_bucket_swept,
+    surface_of,
+)
 
 NUM_SLAVES = 16
 NUM_SEGMENTS = 56  # above the 48 where bucket_sort's own sizes switch to cells
@@ -188,6 +194,7 @@ def scenes(draw, dtype):
         nodes=place(nodes, NUM_NODES),
         segments=padded_segments,
         seg_mask=np.arange(NUM_SEGMENTS) < len(segments),
+        slave_mask=None,
         radius=0.0,
     )
     # The radius: a round number, or the exact distance of one slave +- a few
@@ -196,9 +203,8 @@ def scenes(draw, dtype):
     pairs = oracle.exact_pairs(scene.x[which], scene.nodes, scene.segments, scene.seg_mask)
     nearest = math.sqrt(min(float(p.distance_squared) for p in pairs)) if pairs else 0.0
     bump = draw(st.sampled_from([0, 1, -1, 4 * ULPS, -4 * ULPS])) * np.finfo(dtype).eps
-    scene.radius = draw(st.sampled_from([0.0, 0.125, 0.5, 2.0]) | st.just(nearest * (1 + bump)))
-    scene.radius = max(scene.radius, 0.0)
-    return scene
+    radius = draw(st.sampled_from([0.0, 0.125, 0.5, 2.0]) | st.just(nearest * (1 + bump)))
+    return scene._replace(radius=max(radius, 0.0))
 
 
 def _with_bad_rows(values: np.ndarray, rows, fill) -> np.ndarray:
@@ -233,7 +239,7 @@ FILLS = st.sampled_from([np.nan, np.inf, -np.inf])
 def test_contact_matches_exact_oracle_at_hard_places(name, dtype, data):
     scene = data.draw(scenes(dtype))
     detect = CONTACT_DETECTORS[name]
-    surface = scene.surface()
+    surface = surface_of(scene)
     radius = jnp.asarray(scene.radius, dtype)
     mask = jnp.ones(NUM_SLAVES, bool)
     contact = detect(jnp.asarray(scene.x), surface, radius, mask)
@@ -252,7 +258,7 @@ def test_contact_matches_exact_oracle_at_hard_places(name, dtype, data):
 def test_crossing_matches_exact_oracle_at_hard_places(name, dtype, data):
     scene = data.draw(scenes(dtype))
     detect = CROSSING_DETECTORS[name]
-    surface = scene.surface()
+    surface = surface_of(scene)
     mask = jnp.ones(NUM_SLAVES, bool)
     crossing = detect(jnp.asarray(scene.x_prev), jnp.asarray(scene.x), surface, mask)
     check_crossing(crossing, scene, dtype)
@@ -277,10 +283,11 @@ def test_plain_bucket_calls_measure_their_sizes_with_and_without_cells():
         nodes=np.stack([np.linspace(-1, 2, NUM_NODES), np.sin(np.arange(NUM_NODES))], -1) / 2,
         segments=np.stack([np.arange(NUM_SEGMENTS), np.arange(1, NUM_NODES)], -1).astype(np.int32),
         seg_mask=np.ones(NUM_SEGMENTS, bool),
+        slave_mask=None,
         radius=0.25,
     )
     for count in (4, NUM_SEGMENTS):
-        few = dataclasses.replace(scene, seg_mask=np.arange(NUM_SEGMENTS) < count)
+        few = scene._replace(seg_mask=np.arange(NUM_SEGMENTS) < count)
         surface = Surface(jnp.asarray(few.nodes), jnp.asarray(few.segments[:count]))
         contact = jaxcontact.bucket_sort(jnp.asarray(few.x), surface, radius=few.radius)
         check_contact(contact, few, np.float64)

@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 from jaxcontact.sim import plasticity, solid
+from tests.tolerances import FLOAT64_EXACT_ATOL, FLOAT64_RTOL, FORCE_ATOL
 
 pytestmark = pytest.mark.x64
 
@@ -36,16 +37,16 @@ def test_a_uniform_strain_is_reproduced_exactly_and_interior_nodes_balance():
     midpoint = np.asarray(gradient) @ np.linalg.inv(np.eye(2) + 0.5 * np.asarray(gradient))
     expected = [midpoint[0, 0], midpoint[1, 1], 0.0, midpoint[0, 1] + midpoint[1, 0]]
     got = np.asarray(strain).reshape(-1, 4)
-    np.testing.assert_allclose(got, np.tile(expected, (24, 1)), atol=1e-15)
+    np.testing.assert_allclose(got, np.tile(expected, (24, 1)), atol=FLOAT64_EXACT_ATOL)
     np.testing.assert_allclose(
-        np.asarray(spin), 0.5 * (midpoint[0, 1] - midpoint[1, 0]), atol=1e-15
+        np.asarray(spin), 0.5 * (midpoint[0, 1] - midpoint[1, 0]), atol=FLOAT64_EXACT_ATOL
     )
     state = plasticity.PointState.at_rest((6, 4), STEEL, jnp.float64)
     state, delta = solid.step_material(STEEL, mesh, state, mesh.nodes, moved, 1e-6)
     assert float(jnp.abs(delta).max()) == 0.0
     forces = solid.internal_forces(mesh, moved, state.stress)
-    np.testing.assert_allclose(np.asarray(forces[np.array([5, 6])]), 0, atol=1e-9)
-    np.testing.assert_allclose(np.asarray(forces.sum(0)), 0, atol=1e-9)
+    np.testing.assert_allclose(np.asarray(forces[np.array([5, 6])]), 0, atol=FORCE_ATOL)
+    np.testing.assert_allclose(np.asarray(forces.sum(0)), 0, atol=FORCE_ATOL)
     assert float(jnp.abs(forces).max()) > 1.0  # the boundary nodes do carry the stress
 
 
@@ -54,9 +55,9 @@ def test_a_uniform_stress_pulls_the_nodes_by_half_an_edge_each():
     stress = jnp.tile(jnp.array([100.0, 0.0, 30.0, 0.0]), (1, 4, 1))  # sigma_xx = 100 MPa
     forces = np.asarray(solid.internal_forces(mesh, mesh.nodes, stress))
     # Nodes 0 and 2 on the left edge, 1 and 3 on the right: sigma h / 2 = 50 N/mm inwards.
-    np.testing.assert_allclose(forces[:, 0], [50.0, -50.0, 50.0, -50.0], atol=1e-9)
-    np.testing.assert_allclose(forces[:, 1], 0, atol=1e-9)
-    np.testing.assert_allclose(float(mesh.mass.sum()), STEEL.density * 2.0, rtol=1e-12)
+    np.testing.assert_allclose(forces[:, 0], [50.0, -50.0, 50.0, -50.0], atol=FORCE_ATOL)
+    np.testing.assert_allclose(forces[:, 1], 0, atol=FORCE_ATOL)
+    np.testing.assert_allclose(float(mesh.mass.sum()), STEEL.density * 2.0, rtol=FLOAT64_RTOL)
 
 
 def test_a_rigid_rotation_in_steps_turns_the_stress_and_strains_nothing():
@@ -80,7 +81,7 @@ def test_a_rigid_rotation_in_steps_turns_the_stress_and_strains_nothing():
     # Turned by 90 degrees counter-clockwise: xx and yy swap, xy changes sign, zz stays.
     turned = np.array([-40.0, 100.0, 18.0, -25.0])
     got = np.asarray(state.stress).reshape(-1, 4)
-    np.testing.assert_allclose(got, np.tile(turned, (24, 1)), atol=1e-9)
+    np.testing.assert_allclose(got, np.tile(turned, (24, 1)), atol=FORCE_ATOL)
 
 
 def test_a_bending_mode_changes_no_element_volume_and_makes_no_pressure():
@@ -90,8 +91,8 @@ def test_a_bending_mode_changes_no_element_volume_and_makes_no_pressure():
     x, y = mesh.nodes[:, 0], mesh.nodes[:, 1]
     moved = mesh.nodes.at[:, 0].add(4e-4 * (x - 0.5) * (y - 0.5))
     strain, _ = solid.strain_and_spin(mesh, mesh.nodes, moved)
-    np.testing.assert_allclose(np.asarray(strain[..., :3].sum(-1)), 0, atol=1e-15)
+    np.testing.assert_allclose(np.asarray(strain[..., :3].sum(-1)), 0, atol=FLOAT64_EXACT_ATOL)
     state = plasticity.PointState.at_rest((1, 4), STEEL, jnp.float64)
     state, _ = solid.step_material(STEEL, mesh, state, mesh.nodes, moved, 1e-6)
-    np.testing.assert_allclose(np.asarray(state.stress[..., :3].mean(-1)), 0, atol=1e-9)
+    np.testing.assert_allclose(np.asarray(state.stress[..., :3].mean(-1)), 0, atol=FORCE_ATOL)
     assert float(jnp.abs(state.stress[..., 0]).max()) > 1.0  # yet it is stressed (deviatoric)

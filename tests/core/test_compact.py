@@ -28,6 +28,7 @@ from jaxcontact import (
 from jaxcontact._pipeline import driver
 from jaxcontact._query.closest import CLOSEST
 from jaxcontact.scenes import cutting_scene, rough_die_scene
+from tests.core.test_search import NUM_STEPS, RADIUS, SKIN, surface_at, trajectory
 from tests.helpers import (
     FLOAT,
     assert_same_contact,
@@ -35,7 +36,6 @@ from tests.helpers import (
     binned_tolerance,
     gradient_atol,
 )
-from tests.test_search import NUM_STEPS, RADIUS, SKIN, surface_at, trajectory
 
 
 def _assert_packed(entries, dense, num_rows: int, flag: str, exact, close):
@@ -204,7 +204,7 @@ def test_readme_compact_snippet_gives_the_dense_forces():
 
     import jaxcontact
 
-    readme = pathlib.Path(__file__).resolve().parent.parent / "README.md"
+    readme = pathlib.Path(__file__).resolve().parents[2] / "README.md"
     section = readme.read_text().split("### The search object")[1].split("\n### ")[0]
     (snippet,) = [s for s in re.findall(r"```python\n(.*?)```", section, re.S) if "compact" in s]
     scene = cutting_scene(2_000, 18.0, dtype=FLOAT)  # the programs of the tests above

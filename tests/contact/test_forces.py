@@ -21,6 +21,20 @@ from jax.test_util import check_grads
 from jaxcontact import ContactList, Pairs, Search, Surface, all_to_all, bucket_sort, track
 from jaxcontact.forces import Forces, Friction, coulomb, penalty
 from tests.helpers import FLOAT
+from tests.tolerances import (
+    DISSIPATION_SLACK,
+    FD_SMOOTH_ATOL,
+    FD_SMOOTH_RTOL,
+    FD_STEP,
+    FLOAT32_ATOL,
+    FLOAT32_RTOL,
+    FLOAT32_SUM_ATOL,
+    FLOAT32_SUM_RTOL,
+    FLOAT64_RTOL,
+    FLOAT64_STEPS_RTOL,
+    FORCE_ATOL,
+    STICK_FRICTION_RTOL,
+)
 
 # The incline, SI units: a rigid block of 1 kg on three contact nodes 0.25 m
 # apart, normal and stick stiffness 1e4 N/m per node, g = 9.81 m/s^2.
@@ -93,16 +107,18 @@ def test_a_block_sticks_below_the_friction_angle_and_slides_above_it():
     assert np.abs(np.asarray(travel[0])).max() < 2.5 * stretch
     # The undamped stick springs oscillate about the static friction m g sin(theta).
     np.testing.assert_allclose(
-        float(friction[0].mean()), MASS * GRAVITY * np.sin(thetas[0]), rtol=0.05
+        float(friction[0].mean()), MASS * GRAVITY * np.sin(thetas[0]), rtol=STICK_FRICTION_RTOL
     )
     # Sliding: once the stick springs have loaded (a few steps), the block accelerates
     # down the slope at a = g (sin(theta) - mu cos(theta)), friction at its cap mu m g cos(theta).
     accel = GRAVITY * (np.sin(np.radians(25.0)) - mu * np.cos(np.radians(25.0)))
     measured = np.diff(np.asarray(travel[1]), 2) / DT**2
-    np.testing.assert_allclose(measured[20:], -accel, rtol=1e-6)
+    np.testing.assert_allclose(measured[20:], -accel, rtol=FLOAT32_RTOL)
     assert float(travel[1, -1]) < -0.5 * accel * (STEPS * DT) ** 2 * 0.95
     np.testing.assert_allclose(
-        np.asarray(friction[1, 20:]), mu * MASS * GRAVITY * np.cos(np.radians(25.0)), rtol=1e-6
+        np.asarray(friction[1, 20:]),
+        mu * MASS * GRAVITY * np.cos(np.radians(25.0)),
+        rtol=FLOAT32_RTOL,
     )
 
 
@@ -112,8 +128,12 @@ def test_a_sliding_block_does_not_depend_on_how_the_master_is_split():
     whole = slide(theta, mu, split=False)
     split = slide(theta, mu, split=True)
     assert float(whole[0][-1]) < -0.5  # it slid across several of the split's vertices
-    np.testing.assert_allclose(np.asarray(split[0]), np.asarray(whole[0]), rtol=1e-9, atol=1e-12)
-    np.testing.assert_allclose(np.asarray(split[1]), np.asarray(whole[1]), rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(
+        np.asarray(split[0]), np.asarray(whole[0]), rtol=FLOAT64_STEPS_RTOL, atol=FLOAT64_RTOL
+    )
+    np.testing.assert_allclose(
+        np.asarray(split[1]), np.asarray(whole[1]), rtol=FLOAT64_STEPS_RTOL, atol=FORCE_ATOL
+    )
 
 
 def wavy_master(dtype, shift):
@@ -152,7 +172,7 @@ def test_friction_never_adds_energy_over_a_random_run():
         stored = (np.sum(traction**2, -1) - np.sum(last**2, -1)) / (2 * k_t)
         persisted = np.asarray(slip.persisted)
         dissipated = np.where(persisted, -f_t * np.asarray(slip.slip) - stored, 0)
-        assert dissipated.min() >= -1e-5 * k_t * 0.05**2, dissipated
+        assert dissipated.min() >= -DISSIPATION_SLACK * k_t * 0.05**2, dissipated
         # What sliding dissipated: none while sticking, at most the total.
         sliding = np.asarray(friction.dissipated, np.float64)
         is_stuck = np.asarray(friction.stuck)
@@ -194,29 +214,29 @@ def test_two_pass_counts_each_contact_once_and_balances():
     forces = penalty(contact, surface, k, two_pass=True)
     nodal = np.asarray(forces.on_slaves + forces.on_master)  # slaves are the master's nodes
     upper, lower = nodal[:5].sum(0), nodal[5:].sum(0)
-    np.testing.assert_allclose(upper, -lower, atol=1e-6)
+    np.testing.assert_allclose(upper, -lower, atol=FLOAT32_ATOL)
     # One pass (the upper block's nodes against the lower block) gives the same total.
     one = all_to_all(
         surface.nodes[:5], surface._replace(body=None, mask=np.arange(8) >= 4), radius=0.05
     )
     np.testing.assert_allclose(
-        upper, np.asarray(penalty(one, surface, k).on_slaves.sum(0)), rtol=1e-5
+        upper, np.asarray(penalty(one, surface, k).on_slaves.sum(0)), rtol=FLOAT32_SUM_RTOL
     )
-    np.testing.assert_allclose(upper, [0.0, 5 * k * depth], rtol=1e-5, atol=1e-9)
+    np.testing.assert_allclose(upper, [0.0, 5 * k * depth], rtol=FLOAT32_SUM_RTOL, atol=FORCE_ATOL)
     # Without two_pass every contact counts twice.
     twice = penalty(contact, surface, k)
     np.testing.assert_allclose(
-        np.asarray(twice.on_slaves + twice.on_master)[:5].sum(0), 2 * upper, rtol=1e-5
+        np.asarray(twice.on_slaves + twice.on_master)[:5].sum(0), 2 * upper, rtol=FLOAT32_SUM_RTOL
     )
     # The compact form gives the same forces.
     entries = bucket_sort(surface.nodes, surface, compact=True, **keywords)
     assert isinstance(entries, ContactList)
     compact = penalty(entries, surface, k, num_slaves=10, two_pass=True)
     np.testing.assert_allclose(
-        np.asarray(compact.on_slaves), np.asarray(forces.on_slaves), atol=1e-6
+        np.asarray(compact.on_slaves), np.asarray(forces.on_slaves), atol=FLOAT32_ATOL
     )
     np.testing.assert_allclose(
-        np.asarray(compact.on_master), np.asarray(forces.on_master), atol=1e-6
+        np.asarray(compact.on_master), np.asarray(forces.on_master), atol=FLOAT32_ATOL
     )
 
 
@@ -261,7 +281,15 @@ def test_gradients_of_a_frictional_penalty_energy_match_finite_differences():
         mu=0.4,
     )
     assert bool(after.stuck.any()) and not bool(after.stuck.all())  # both regimes
-    check_grads(energy, (x, floor.nodes), order=1, modes=["rev"], atol=1e-6, rtol=1e-5, eps=1e-6)
+    check_grads(
+        energy,
+        (x, floor.nodes),
+        order=1,
+        modes=["rev"],
+        atol=FD_SMOOTH_ATOL,
+        rtol=FD_SMOOTH_RTOL,
+        eps=FD_STEP,
+    )
 
 
 def test_bad_force_inputs_are_named():
@@ -334,5 +362,5 @@ def test_compact_and_dense_searches_give_the_same_frictional_forces_under_vmap()
             np.testing.assert_allclose(
                 np.asarray(getattr(compact, field)),
                 np.asarray(getattr(dense, field)[scene]),
-                atol=1e-5,
+                atol=FLOAT32_SUM_ATOL,
             )

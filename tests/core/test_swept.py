@@ -57,7 +57,7 @@ def assert_crossings(crossing, segment, t, point):
 # and in test_transforms.py): each size is a compilation. With x64 off
 # (tests/test_x64_off.py), the largest only: what x64 changes is the index
 # dtypes, not the shapes, and empty inputs run with x64 off in
-# tests/test_validation.py.
+# tests/core/test_validation.py.
 @pytest.mark.parametrize(
     "num_slaves, num_segments",
     [

@@ -9,6 +9,7 @@ from jax.test_util import check_grads
 import jaxcontact
 from jaxcontact import Surface
 from tests.oracle import oracle_contact, oracle_crossing
+from tests.tolerances import FLOAT64_EXACT_ATOL
 
 MODES = pytest.mark.parametrize("mode", ["fwd", "rev"])
 
@@ -142,7 +143,7 @@ def test_gap_gradient_on_a_face_is_its_normal():
     )
     (grad_x, _), _ = contact_gradients(x, nodes, segments, seg_mask, mask)
     np.testing.assert_allclose(
-        grad_x, [[0.0, 1.0], [1.0, 0.0], [0.0, 1.0], [0.0, -1.0]], rtol=0, atol=1e-15
+        grad_x, [[0.0, 1.0], [1.0, 0.0], [0.0, 1.0], [0.0, -1.0]], rtol=0, atol=FLOAT64_EXACT_ATOL
     )
 
 
