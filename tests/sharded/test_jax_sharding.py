@@ -22,7 +22,9 @@ import pytest
 from jax.sharding import AxisType, NamedSharding
 from jax.sharding import PartitionSpec as P
 
-from jaxcontact import Search, Surface, _dense, all_to_all, bucket_sort, bucket_swept, swept
+from jaxcontact import Search, Surface, all_to_all, bucket_sort, bucket_swept, swept
+from jaxcontact._pipeline import driver
+from jaxcontact._query.closest import CLOSEST
 from tests.helpers import local_atol
 
 RADIUS = 0.25
@@ -234,15 +236,19 @@ def test_inputs_not_split_over_explicit_axes_trace_to_the_same_program():
     # programs gather nothing, so they are what they were without it.
     _, x, surface, _ = _scene(12, np.float32)
     radius = jnp.asarray(RADIUS, np.float32)
-    unwrapped = jax.jit(inspect.unwrap(_dense._all_to_all))
+    unwrapped = jax.jit(inspect.unwrap(driver.exhaustive), static_argnums=0)
     for name, x_in in {
         "one device": x,
         "explicit, replicated": _put(jax.make_mesh((4,), ("d",)), x, P()),
         "auto, split": _put(jax.make_mesh((4,), ("d",), axis_types=(AUTO,)), x, P("d")),
     }.items():
-        got = jax.make_jaxpr(_dense._all_to_all)(x_in, surface, radius, None)
-        want = jax.make_jaxpr(unwrapped)(x_in, surface, radius, None)
+        got = jax.make_jaxpr(driver.exhaustive, static_argnums=0)(
+            CLOSEST, (x_in,), surface, radius, None
+        )
+        want = jax.make_jaxpr(unwrapped, static_argnums=0)(CLOSEST, (x_in,), surface, radius, None)
         assert _printed(got) == _printed(want), name
     split = _put(jax.make_mesh((4,), ("d",)), x, P("d"))
-    got = jax.make_jaxpr(_dense._all_to_all)(split, surface, radius, None)
+    got = jax.make_jaxpr(driver.exhaustive, static_argnums=0)(
+        CLOSEST, (split,), surface, radius, None
+    )
     assert "reshard" in str(got)
