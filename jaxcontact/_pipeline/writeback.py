@@ -76,10 +76,11 @@ def pack(result, listing: type, flag: str, rows: Array, capacity: int, num_rows:
         shape = valid.shape + (1,) * (values.ndim - 1)
         return jnp.where(valid.reshape(shape), values[at], fill_of(name))
 
+    node = jnp.where(valid, rows[at], num_rows).astype(jnp.int32)
     skip = ("node", "overflow", flag)
     fields = {name: take(name) for name in listing._fields if name not in skip}
     return listing(
-        node=jnp.where(valid, rows[at], num_rows).astype(jnp.int32),
+        node=node,
         **fields,
         **{flag: valid},
         overflow=result.overflow | (count > capacity),
