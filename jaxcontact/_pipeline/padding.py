@@ -12,9 +12,9 @@ So the one-call detectors, called plainly on concrete arrays, pad the
 slaves, the segments and the master nodes up to a size class (``size_class``:
 four classes per doubling, at most 1/4 more rows) with masked padding, run
 the program compiled for that class, and cut the rows back. Real rows are
-unchanged: padding never changes a real row (docs/contract.md). Under
-``jit``, ``vmap`` or ``grad`` the caller's program is compiled once at the
-caller's shapes anyway, and nothing is padded.
+unchanged: padding never changes a real row (the repository's
+docs/contract.md). Under ``jit``, ``vmap`` or ``grad`` the caller's program
+is compiled once at the caller's shapes anyway, and nothing is padded.
 """
 
 from __future__ import annotations
