@@ -64,7 +64,7 @@ def _lowest_in_plane(pair_value, edges, segment_ok: Array, dtype):
 
     For small scenes with more segments than ``lowest_score`` unrolls (the
     workpiece's own outline in ``sim.cutting``): one fused pass and one
-    reduction, where the running minimum ran a loop of ``M / 8`` steps, a
+    reduction, where the running minimum runs a loop of ``M / 8`` steps, a
     few kernels each, which is the whole of a small scene's time. ``argmin``
     takes the first of equal scores, the lower index, as the running minimum
     does; NaN scores are no candidate there (``value < best`` is False), so
