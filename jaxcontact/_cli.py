@@ -5,13 +5,13 @@
 writes summary.json, chip.png, forces.png and chip.gif);
 ``jaxcontact demo --scene ploughing`` runs the ploughing simulation
 (``jaxcontact.sim.demo``); ``jaxcontact demo --scene paper`` runs the source
-paper's scene (docs/scenes.md, Test 1) through both dense detectors, prints
-what they found and how long they took, and draws the scene near the tool
-tip. An option of one scene given with another is refused. ``jaxcontact
-bench`` times jaxcontact's own forms on the reference scenes
-(``jaxcontact._selftime``); the comparisons with other libraries are the
-repository's ``benchmarks/`` folder, not installed. Each subcommand is
-registered in ``_parser``.
+paper's scene (the repository's docs/scenes.md, Test 1) through both
+exhaustive detectors (``all_to_all``, ``swept``), prints what they found and
+how long they took, and draws the scene near the tool tip. An option of one
+scene given with another is refused. ``jaxcontact bench`` times
+jaxcontact's own forms on the reference scenes (``jaxcontact._selftime``);
+the comparisons with other libraries are the repository's ``benchmarks/``
+folder, not installed. Each subcommand is registered in ``_parser``.
 """
 
 from __future__ import annotations

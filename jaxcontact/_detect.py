@@ -90,8 +90,9 @@ def all_to_all(
       normals: ``"flat"`` (each segment's own normal) or ``"smooth"``: a
         normal interpolated along each segment between nodal normals, the
         bisectors at nodes where the outline turns by less than ``corner``
-        degrees, and the gap measured along it (the contract, "Smooth
-        normals"). The segment, ``xi`` and point are the same either way.
+        degrees, and the gap measured along it (the repository's
+        docs/contract.md, "Smooth normals"). The segment, ``xi`` and point
+        are the same either way.
       corner: the corner angle of smooth normals, in degrees.
       **replaced: ``slave_node``, ``slave_body``, ``self_contact``: replaced
         by ``pairs``; they still work, with a ``DeprecationWarning``.

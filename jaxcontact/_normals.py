@@ -93,7 +93,7 @@ def end_normals(surface: Surface, corner: float) -> tuple[Array, Array]:
 def smoothed(result, x: Array, surface: Surface, corner: float):
     """``result`` (a ``Contact`` or ``ContactList`` of the slaves ``x``) with
     the smooth normal and the gap along it; ``active`` follows the new gap.
-    Only found rows are worked on (``_rows.on_rows``)."""
+    Only found rows are worked on (``rows.on_rows``)."""
     num_segments = surface.segments.shape[0]
     if num_segments == 0 or x.shape[0] == 0:
         return result

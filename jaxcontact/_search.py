@@ -88,7 +88,7 @@ class SearchState:
         0 before the first rebuild.
       reach: ``radius + skin`` of the search that allocated it (static):
         a search that reaches farther refuses the state.
-      history: last step's contact of every slave (dense, N rows, for the
+      history: last step's contact of every slave (the N-row form, for the
         compact form too) for ``Search(track=True)``; ``None`` otherwise.
     """
 
@@ -161,13 +161,13 @@ class Search:
         reads every row to check the rule, carries the candidates in the
         state, and searches the longer lists of the wider reach; a step that
         finds them again costs more than one without a skin. Whether it pays
-        depends on the scene: ``benchmarks/search_step.py`` (one step) and
-        ``benchmarks/simulate.py`` (a ``lax.scan``) measure it.
+        depends on the scene: the repository's benchmarks/search_step.py
+        (one step) and benchmarks/simulate.py (a ``lax.scan``) measure it.
       method: ``"binned"``: bucket sort with the segments binned in cells,
         each kept slave against its cell's segments; ``"unbinned"``: bucket
-        sort with each kept slave against every segment (``"dense"``, its
-        old name, warns); ``"auto"``: binned above ``cells_above`` segments,
-        unbinned at or below;
+        sort with each kept slave against every segment (``"dense"`` still
+        selects it, with a ``DeprecationWarning``); ``"auto"``: binned above
+        ``cells_above`` segments, unbinned at or below;
         ``"exhaustive"``: every slave against every segment (``all_to_all``,
         ``swept``), with no sizes and no overflow.
       slack: every measured capacity is multiplied by this at ``allocate``;
@@ -191,7 +191,8 @@ class Search:
         ``DeprecationWarning``, and applies to every call.
       track: carry each slave's contact from step to step in the state;
         ``closest`` then returns ``(contact, state, slip)`` with the
-        ``Slip`` since the last step (docs/contract.md, "Slip history").
+        ``Slip`` since the last step (the repository's docs/contract.md,
+        "Slip history").
       normals: ``"flat"``, each segment's own normal, or ``"smooth"``:
         normals interpolated along each segment between nodal normals,
         continuous across a vertex where the outline turns by less than
@@ -471,7 +472,7 @@ class Search:
     def _room(self, sizes: Sizes, x, surface, mask, at_least, pairing, axes=None) -> Sizes:
         """``sizes`` with the compact form's capacity measured (the largest over
         a batch, mapped over ``axes``), and at least ``at_least``'s; none
-        (the dense form) for a search that is not compact."""
+        (the N-row form) for a search that is not compact."""
         if not self.compact:
             return dataclasses.replace(sizes, contact_capacity=0)
         radius = jnp.asarray(self.radius, x.dtype)

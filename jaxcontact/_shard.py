@@ -6,12 +6,12 @@ leading axis with ``jax.vmap``.)
 Devices: ``sharded`` runs a detector under ``jax.shard_map`` with the slave
 rows split over one mesh axis and the master replicated. Each device searches
 its own rows, so the only communication is the ``psum`` that ORs
-``overflow``; reductions onto the tool (``contact_forces(...,
+``overflow``; reductions onto the tool (``forces.penalty(...,
 axis_name=...)``) are one more ``psum``. The same code runs on one host or
 many (``jax.distributed.initialize`` first; see the README).
 
 Arrays already sharded with ``jax.sharding`` may also be passed to the
-detectors as they are (``_placement``): each program gathers them and
+detectors as they are (``_pipeline.placement``): each program gathers them and
 searches every row on every device, which is simpler but does not split the
 work.
 """

@@ -8,12 +8,12 @@ that translates, rotates or stretches carries the material point with it. The
 to this step's closest point, positive along the direction of the segment the
 slave touches now (from its start node to its end node). When the closest
 segment changed, the path walks across the vertices between the two, by the
-segments' links (``_outline.vertex_neighbours``), so no numbering is assumed:
+segments' links (``outline.vertex_neighbours``), so no numbering is assumed:
 outlines in any order, several outlines, segments that appeared since.
 
 The walk goes up to ``WALK`` segments each way. Farther along the same
 outline (a slave that slid past more than ``WALK`` segments in one step) the
-slip is the difference of the arc coordinates of ``_outline.chains`` (the
+slip is the difference of the arc coordinates of ``outline.chains`` (the
 shorter way round a loop); these carry no gradient with respect to the nodes
 in between. Across outlines (the slave now touches another chain, or last
 step's segment is no longer real) there is no path along the master: the

@@ -27,9 +27,10 @@ class Surface(NamedTuple):
     only masked segments use.
 
     ``body`` labels the outline each segment belongs to. With labels on the
-    slaves too (``slave_body=`` of every detector), a slave pairs only with
-    the segments of other bodies (and, with ``self_contact=True``, with its
-    own body's outside its neighbourhood along the outline): several
+    slaves too (``pairs=Pairs(slave_body=...)`` of every detector), a slave
+    pairs only with the segments of other bodies (and, with
+    ``Pairs(self_contact=True)``, with its own body's outside its
+    neighbourhood along the outline): several
     deformable bodies are searched in one call.
     """
 
@@ -63,7 +64,7 @@ class Contact(NamedTuple):
 
 
 def _spread_rows(entries, dense: type, num_rows: int):
-    """The ``dense`` result (``Contact`` or ``Crossing``) of ``num_rows`` rows
+    """The N-row result (type ``dense``: ``Contact`` or ``Crossing``) of ``num_rows`` rows
     that compact ``entries`` describe: each field's entries put at rows
     ``entries.node`` of rows of nothing found (``-1`` for indices, else zero
     or False); entries naming row ``num_rows``, the padding, are dropped."""
@@ -107,7 +108,7 @@ class ContactList(NamedTuple):
     overflow: Array  # bool[]  a capacity (K or another) was too small: a contact may be missing
 
     def to_contact(self, num_rows: int) -> Contact:
-        """The dense ``Contact`` of ``num_rows`` slaves (N, static) these entries describe."""
+        """The N-row ``Contact`` of ``num_rows`` slaves (N, static) these entries describe."""
 
         return _spread_rows(self, Contact, num_rows)
 
@@ -148,14 +149,15 @@ class CrossingList(NamedTuple):
     overflow: Array  # bool[]  a capacity (K or another) was too small: a crossing may be missing
 
     def to_crossing(self, num_rows: int) -> Crossing:
-        """The dense ``Crossing`` of ``num_rows`` slaves (N, static) these entries describe."""
+        """The N-row ``Crossing`` of ``num_rows`` slaves (N, static) these entries describe."""
 
         return _spread_rows(self, Crossing, num_rows)
 
 
 # With this many segments or fewer, each kept slave meets every segment: a
 # running minimum over M broadcast segments beats per-slave candidate gathers
-# (benchmarks/bucket.py measures the crossover). ``Search(cells_above=...)``.
+# (measured: the repository's benchmarks/bucket.py finds the crossover).
+# ``Search(cells_above=...)``.
 CELLS_ABOVE = 48
 # Kept slaves are searched in chunks of this many rows, fullest lists first.
 CHUNK_ROWS = 2048
@@ -183,8 +185,8 @@ class Sizes:
         hashes the cells into that many lists (a grid of that many more
         cells than slaves would otherwise need wider cells).
       contact_capacity: entries of the compact result (``ContactList``,
-        ``Search(compact=True)``); 0 (the default) returns the dense
-        ``Contact`` of N rows.
+        ``Search(compact=True)``); 0 (the default) returns the N-row form,
+        a ``Contact`` of N rows.
     """
 
     num_slaves: int

@@ -43,7 +43,7 @@ tangential force on the slave opposes its slip relative to the master; the
 master's nodes take its reaction.
 
 **Two deformable bodies** searched both ways in one call (every node a
-slave, every outline a master, ``slave_body`` labels): each physical contact
+slave, every outline a master, ``Pairs(slave_body=...)``): each physical contact
 is found twice, once from each side. ``two_pass=True`` weights both passes
 by 1/2, the symmetric two-pass node-to-segment treatment (El-Abbasi and
 Meguid, 1998; Zavarise and De Lorenzis, 2009), so each contact is counted

@@ -60,7 +60,7 @@ def overlaps(first: Box, second: Box) -> Array:
     """bool[...]: the boxes share a point (touching counts).
 
     Per coordinate, not ``jnp.all(..., axis=-1)``: XLA's CPU code runs a
-    length-2 reduction as a loop per row (``_inputs.squared_norm``); the
+    length-2 reduction as a loop per row (``segments.squared_norm``); the
     cull of 81,939 rows measured 2x faster so (0.15 against 0.08 ms).
     """
 
@@ -103,11 +103,11 @@ def cull_blocks(
     ``target``, at most ``capacity`` of them (``ok=None``: every row may be).
 
     A row's own box, not its block's: one pass of comparisons over the rows,
-    where a box per block cost XLA a copy of each coordinate column and
+    where a box per block costs XLA a copy of each coordinate column and
     min/max reductions over it (the broad phase with the kept rows measured
     3.7x faster on the CPU at 10^6 rows, 4.8 against 1.3 ms, and 1.5x at
-    81,939; ``benchmarks/stages.py``). It keeps no block a box per block
-    would drop. A row that can be found lies in the target box
+    81,939, with the repository's benchmarks/stages.py). It keeps no block
+    a box per block would drop. A row that can be found lies in the target box
     (``conservative_margin``), so the rows found are the same.
     """
     num_rows = low.shape[0]
@@ -140,10 +140,10 @@ def kept_rows(blocks: Blocks, mask: Array | None, *points: Array):
     two ends) as f[S, 2], bad rows zeroed, and bool[S] which are real.
 
     A row is real when it is kept, not masked and finite in every one of
-    ``points`` (``_inputs.rows_ok``, ``_inputs.paths_ok``), decided here on
+    ``points`` (``segments.rows_ok``, ``segments.paths_ok``), decided here on
     the kept rows only: the broad phase's own test then fuses into its one
-    pass over the N rows, where a flag per row shared by both was written
-    out first (measured 1.3 against 1.5 ms at 10^6 rows; no change at
+    pass over the N rows, where a flag per row shared by both would be
+    written out first (measured 1.3 against 1.5 ms at 10^6 rows; no change at
     81,939, whose partial last block has XLA write the flags out anyway).
     """
     num_rows = points[0].shape[0]

@@ -73,9 +73,10 @@ def exhaustive(query, points: tuple, surface: Surface, radius, mask, pairs: Pair
 
     The search runs in a ``lax.cond`` (``in_stages``), scene by scene under
     ``vmap`` (``one_scene_at_a_time``). Masked rows are dropped when
-    assembling, not inside the search's loop (a row mask fused into it made
-    it 3-4x slower). Compiled as one program even when called outside
-    ``jit``: op by op, the unrolled search took seconds to dispatch.
+    assembling, not inside the search's loop (a row mask fused into it
+    makes it 3-4x slower, measured). Compiled as one program even when
+    called outside ``jit``: op by op, the unrolled search takes seconds to
+    dispatch.
     """
     num_rows = points[0].shape[0]
     per_row = (radius if radius is not None and jnp.ndim(radius) else None, pairs)
@@ -95,7 +96,7 @@ def exhaustive(query, points: tuple, surface: Surface, radius, mask, pairs: Pair
     result = query.assemble(points, segments, choice, radius, no_overflow, slave_ok, (rule, tags))
     if result.segment.shape[0] == num_rows:
         return result
-    # The search wrote whole vectors too: cut back after it, not fused into it.
+    # The search writes whole vectors too: cut back after it, not fused into it.
     result = jax.lax.optimization_barrier(result)
     return jax.tree.map(lambda field: field[:num_rows] if field.ndim else field, result)
 

@@ -31,7 +31,7 @@ def as_array(values, dtype=None):
     NumPy arrays and Python or NumPy scalars stay NumPy arrays: a jitted
     program takes them as arguments for a few microseconds each, where
     ``jnp.asarray`` puts each on the device apart (about 0.1 ms on the CPU,
-    measured: benchmarks/one_call.py). JAX arrays and tracers go through
+    measured with the repository's benchmarks/one_call.py). JAX arrays and tracers go through
     ``jnp.asarray``.
     """
     if isinstance(values, jax.Array | jax.core.Tracer):
@@ -99,7 +99,7 @@ def _check_real_indices(segments, mask, num_nodes: int):
 
     Only where the indices and the mask are concrete: with either traced,
     the real segments are not known here, and an index out of range makes
-    the segment padding instead (``resolve_segments``).
+    the segment padding instead (``segments.resolve_segments``).
     """
     if not (is_concrete(segments) and is_concrete(mask)):
         return

@@ -32,12 +32,13 @@ def lowest_score(
     Exact ties go to the segment met first; every caller meets each row's
     segments in increasing index order, so that is the lower index. (Carrying
     a second key for ties through this loop made it 3.5x slower, measured;
-    see ``_assemble.prefer_outside`` for how vertex ties are settled.)
+    see ``closest.prefer_outside`` for how vertex ties are settled.)
 
     A running minimum over ``num_steps`` calls of ``score``: O(N) memory and
     one fused pass over the rows per step. Against an (N, M) plane reduced by
     ``argmin`` it is 3.7x faster with the 20-segment cutting tool and slower
-    with the paper's 2 segments (benchmarks/dense.py). Steps run in unrolled
+    with the paper's 2 segments (measured with the repository's
+    benchmarks/dense.py). Steps run in unrolled
     blocks inside a ``lax.scan``, so compile time stays flat as steps grow.
 
     Args:
@@ -76,7 +77,7 @@ def lowest_score(
 
     def visit_block(carry, first):
         # Traced once and unrolled in the jaxpr (``unroll=True``), not by a
-        # Python loop that traced ``score`` ``block`` times.
+        # Python loop that would trace ``score`` ``block`` times.
         visit_first = functools.partial(visit, first=first)
         return jax.lax.fori_loop(0, block, visit_first, carry, unroll=True), None
 
@@ -96,7 +97,8 @@ def lowest_in_blocks(
     candidate) and merged into the running minimum between blocks. For
     searches whose steps gather their segments: one gather of a block's
     segments instead of one per step, and a row reduction in place of the
-    unrolled minimum (measured cheaper to compile: ``benchmarks/compile_ops.py``).
+    unrolled minimum (measured cheaper to compile with the repository's
+    benchmarks/compile_ops.py).
     ``steps_needed`` as in ``lowest_score``.
     """
     choice = jnp.full((num_rows,), -1, jnp.int32)
@@ -151,10 +153,11 @@ def one_scene_at_a_time(fn):
     through ``stop_gradient`` (``jax.custom_batching.custom_vmap`` supports
     no reverse-mode differentiation) and hold ``lax.cond`` s, which ``vmap``
     would turn into selects that run both branches and lose the fusion
-    boundary ``_narrow.in_stages`` relies on. Mapped, each scene keeps
+    boundary ``narrow.in_stages`` relies on. Mapped, each scene keeps
     them; the batched rest (assembling, writing rows) stays vectorised. On
     the CPU that measured as fast per scene as one unbatched call, where
-    plain batching was up to 6x slower (benchmarks/scaling.py). On other
+    plain batching was up to 6x slower (measured with the repository's
+    benchmarks/scaling.py). On other
     backends the search is batched as usual.
     Arguments must be arrays (or pytrees of arrays); close over static values.
     """
@@ -164,8 +167,8 @@ def one_scene_at_a_time(fn):
     def rule(axis_size, in_batched, *args):
         del axis_size
         if jax.default_backend() != "cpu":
-            # Accelerators run the batch as one vectorised program (untested
-            # here: measure with benchmarks/scaling.py where one is at hand).
+            # Accelerators run the batch as one vectorised program (not
+            # measured: the repository's benchmarks/scaling.py measures it).
             axes = jax.tree.map(lambda flag: 0 if flag else None, in_batched)
             result = jax.vmap(fn, in_axes=tuple(axes))(*args)
             return result, jax.tree.map(lambda _: True, result)

@@ -3,8 +3,8 @@
 Shared by every detector: ``search_all`` (each row against every segment:
 ``all_to_all``, ``swept``, and the bucket sort's kept slaves when there are
 few segments) and ``search_listed`` (each kept slave against its cell's
-segments). Both return segment indices only; ``_assemble`` turns them into
-results.
+segments). Both return segment indices only; the query's ``assemble``
+(``_query``) turns them into results.
 """
 
 from __future__ import annotations
@@ -31,7 +31,7 @@ class Queries(NamedTuple):
     """The rows a search scores, as the pair kernel takes them."""
 
     # The kernel's per-row arguments: f[S, 2] each (a point; a path's two
-    # ends), then the rows' pair tags (``_pairs.RowTags``) or None.
+    # ends), then the rows' pair tags (``pairs.RowTags``) or None.
     rows: tuple
     query: Array  # f[S, 2]  the point whose cell is looked up
     ok: Array  # bool[S]  the row is real
@@ -43,7 +43,7 @@ def search_all(pair_value, segments: Segments, num_rows: int, dtype) -> tuple[Ar
     kept slaves when there are few segments)."""
 
     # Each segment's own share of the kernel, for all at once (``Edge``),
-    # with what the pair rule reads of it (``_pairs``).
+    # with what the pair rule reads of it (``pairs``).
     edges = (edge(segments.start, segments.end), segments.tags)
 
     def score(k):
@@ -64,7 +64,7 @@ def _lowest_in_plane(pair_value, edges, segment_ok: Array, dtype):
 
     For small scenes with more segments than ``lowest_score`` unrolls (the
     workpiece's own outline in ``sim.cutting``): one fused pass and one
-    reduction, where the running minimum ran a loop of ``M / 8`` steps, a
+    reduction, where the running minimum runs a loop of ``M / 8`` steps, a
     few kernels each, which is the whole of a small scene's time. ``argmin``
     takes the first of equal scores, the lower index, as the running minimum
     does; NaN scores are no candidate there (``value < best`` is False), so
@@ -84,7 +84,7 @@ def _search_rows(pair_value, segments: Segments, listed: CellLists, capacity: in
     def score_block(slots):
         # A block of slots at once: one gather of their segments and ends,
         # f[S, B] values. Computed per row from the gathered ends: the same
-        # numbers as a dense search's, so both score a pair alike.
+        # numbers as ``search_all``'s, so both score a pair alike.
         segment = segments_in_slots(listed, slots)
         index = jnp.maximum(segment, 0)
         value = jax.vmap(pair_value, in_axes=1, out_axes=1)(
@@ -98,11 +98,11 @@ def _search_rows(pair_value, segments: Segments, listed: CellLists, capacity: in
     # lowest slot is the lower segment, as the running minimum takes it.
     # Blocks of 8 slots, each gathered at once and reduced along its rows:
     # one slot at a time (an unrolled running minimum, a gather per slot)
-    # made 47 more kernels of the binned closest step, which compiled 1.5x
-    # slower (5.9 against 3.9 s pinned, benchmarks/compile_probe.py) with
-    # the same answers bit for bit. Run time did not change beyond noise in
-    # benchmarks/targets.py (both cores); one pinned A/B had the rough die
-    # at 10^5 x 10^4 at 28 against 37 ms.
+    # makes 47 more kernels of the binned closest step, which compiles 1.5x
+    # slower (measured 5.9 against 3.9 s pinned, the repository's
+    # benchmarks/compile_probe.py) for the same answers bit for bit and no
+    # run time gained beyond noise (measured with the repository's
+    # benchmarks/targets.py, both cores).
     # Every row runs as many slots as the fullest list among them needs, not
     # the capacity in the sizes (measured 1.3x faster on the rough die).
     fullest = jnp.max(listed.count, initial=0)
@@ -115,7 +115,7 @@ def search_listed(kernel, rows, segments: Segments, listed: CellLists, sizes: Si
     """``(i32[S], f[S])``: each kept slave against the segments of its cell, at
     most ``sizes.cell_capacity`` slots; the choice and its score.
 
-    ``kernel(*row, row_tags, segment)`` scores a pair (``_pairs.ruled``);
+    ``kernel(*row, row_tags, segment)`` scores a pair (``pairs.ruled``);
     ``rows`` are the kept slaves' f[S, ...]
     arrays. A row costs as many slots as the fullest list it is searched
     with. Kept blocks hold many slaves whose cells are empty (a block is kept
@@ -139,7 +139,7 @@ def search_listed(kernel, rows, segments: Segments, listed: CellLists, sizes: Si
     # Rows in search order, padded to whole chunks with rows past the end
     # (empty lists). Each chunk gathers its own rows: the chunks after the
     # first of empty lists are never read, so gathering every kept row in
-    # this order up front was work for rows no chunk searched.
+    # this order up front would be work for rows no chunk searches.
     order = jnp.pad(order, (0, pad), constant_values=num_rows)
     heads = order[::chunk_rows]
     # Each chunk's longest list comes first.
@@ -195,7 +195,7 @@ def vmapped(kernel, *rows):
 
     ``segment`` is ``(Edge, segment tags)``: of one segment for all rows
     (f[2] ends) or one per row (f[S, 2] ends). Kernels come from
-    ``_pairs.ruled``; the last of ``rows`` are the rows' tags (or None).
+    ``pairs.ruled``; the last of ``rows`` are the rows' tags (or None).
     """
 
     def pair_value(segment: tuple[Edge, object]):
@@ -211,11 +211,11 @@ def in_stages(go: Array, stages, skipped, value=None):
     Each stage is its own ``lax.cond`` on ``go``, returning ``skipped[i]``
     when not. Besides skipping the work (no real row; no kept block), the
     cond boundaries keep XLA from fusing a search loop into the gathers that
-    read its result: on the CPU it then re-ran the search per gathered value
+    read its result: on the CPU it then re-runs the search per gathered value
     (measured 5x slower on the cutting scene), and ``optimization_barrier``
     does not stop that fusion there. Under ``vmap`` the conds become selects:
     both branches run and the boundaries are lost, which is why the searches
-    run through ``_lowest.one_scene_at_a_time``. ``value`` goes to the first
+    run through ``lowest.one_scene_at_a_time``. ``value`` goes to the first
     stage.
     """
     for stage, empty in zip(stages, skipped, strict=True):

@@ -8,7 +8,7 @@ here under ``jit``, with no numbering assumed (outlines in any order,
 several outlines, segments switched on or off since the last step).
 
 Segment ``j`` follows segment ``k`` when it starts at ``k``'s end node
-(``_assemble.vertex_neighbours``, the lowest such index). Following that
+(``vertex_neighbours``, the lowest such index). Following that
 link from any segment either ends (an open chain) or comes back (a closed
 loop). Pointer jumping (Wyllie's list ranking: each round doubles how far
 every pointer reaches, so ``log2`` of the longest chain rounds suffice)
@@ -52,7 +52,7 @@ def _first_match(keys: Array, wanted: Array, exclude: Array, num_values: int) ->
     ``keys`` lie in ``[-1, num_values - 1)``. Up to ``TABLE_SEGMENTS``
     segments the M x M table of matches answers it in one fused pass and a
     reduction; past that, a sort and a binary search (O(M log M)), whose
-    loop and gathers were most of a small outline's kernels.
+    loop and gathers are most of a small outline's kernels.
     """
     num_keys = keys.shape[0]
     if num_keys <= TABLE_SEGMENTS:

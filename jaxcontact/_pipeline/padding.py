@@ -6,15 +6,15 @@ program has 40-200 kernels: 150-600 maps per program, freed only by
 ``jax.clear_caches()``. A process that calls a detector at hundreds of
 shapes (a sweep over mesh sizes, a notebook, a test suite) reaches the
 kernel's ``vm.max_map_count`` (65,530 by default) and XLA's compiler
-crashes (measured: benchmarks/long_process.py).
+crashes (measured with the repository's benchmarks/long_process.py).
 
 So the one-call detectors, called plainly on concrete arrays, pad the
 slaves, the segments and the master nodes up to a size class (``size_class``:
 four classes per doubling, at most 1/4 more rows) with masked padding, run
 the program compiled for that class, and cut the rows back. Real rows are
-unchanged: padding never changes a real row (docs/contract.md). Under
-``jit``, ``vmap`` or ``grad`` the caller's program is compiled once at the
-caller's shapes anyway, and nothing is padded.
+unchanged: padding never changes a real row (the repository's
+docs/contract.md). Under ``jit``, ``vmap`` or ``grad`` the caller's program
+is compiled once at the caller's shapes anyway, and nothing is padded.
 """
 
 from __future__ import annotations
@@ -140,7 +140,7 @@ def cut_rows(result, num_rows: int | None):
     # On the CPU: host views, cut, and back as the arguments of a program that
     # returns them (copies only: no kernel is compiled, nothing is mapped).
     # A jitted argument costs microseconds; jax.device_put about 0.1 ms an
-    # array (measured: benchmarks/one_call.py).
+    # array (measured with the repository's benchmarks/one_call.py).
     cut = jax.tree.map(
         lambda values: np.asarray(values)[:num_rows] if values.ndim else values, result
     )

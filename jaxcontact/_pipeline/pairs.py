@@ -5,7 +5,7 @@ kernel so that a pair the rule forbids scores ``inf`` (never chosen), and the
 vertex tie rule asks ``allows`` before it hands a slave to the neighbouring
 face. jax-md's neighbour lists have the same single hook
 (``custom_mask_function``). Without slave nodes, slave bodies or
-self-contact there is no rule and the kernels run as before.
+self-contact there is no rule and the kernels run unchanged.
 
 The rule, for slave ``i`` and a real segment ``k``:
 
@@ -17,10 +17,10 @@ The rule, for slave ``i`` and a real segment ``k``:
    meets its own body's segments too, except those within its
    neighbourhood along the outline: the segments whose arc-length distance
    from ``i``'s node, along the chain of segments through it
-   (``_outline``), is below ``SELF_CONTACT_REACH`` times its reach (the
+   (``outline``), is below ``SELF_CONTACT_REACH`` times its reach (the
    radius for closest points, the path's length for crossings).
 
-Why arc length, and why that window (the reasons are in docs/contract.md):
+Why arc length, and why that window (the repository's docs/contract.md has more):
 near a corner of its own outline a slave lies within the radius of the
 faces beyond the corner, and behind them at a convex corner, so a plain
 search reports a false penetration there. A segment on the other face of a

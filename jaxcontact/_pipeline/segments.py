@@ -35,7 +35,7 @@ class Segments:
     ok: Array  # bool[M]  real, finite and of non-zero length
     indices: Array | None  # i32[M, 2]  the node indices of each segment's ends
     num_nodes: int  # P, static: ok segments' node indices lie in [0, P)
-    tags: object = None  # _pairs.SegmentTags: what the pair rule reads, or None
+    tags: object = None  # pairs.SegmentTags: what the pair rule reads, or None
 
 
 def ends_of(nodes: Array, indices: Array) -> Array:
@@ -93,9 +93,9 @@ def squared_norm(vectors: Array) -> Array:
     skin check's threshold, the self-contact window of a path).
 
     Written per column: XLA's CPU code runs ``jnp.sum(..., axis=-1)`` over a
-    length-2 axis as a loop per row; the skin check (``_bucket.expired``,
-    jitted alone) on 81,939 rows took 0.36-0.38 ms that way and 0.2 ms per
-    column (benchmarks/search_step.py times the whole step before and after).
+    length-2 axis as a loop per row; the skin check (``candidates.expired``,
+    jitted alone) on 81,939 rows measured 0.36-0.38 ms that way and 0.2 ms
+    per column (the repository's benchmarks/search_step.py times the whole step).
     """
     return vectors[..., 0] * vectors[..., 0] + vectors[..., 1] * vectors[..., 1]
 

@@ -84,7 +84,7 @@ class _Measured(NamedTuple):
 @functools.partial(jax.jit, static_argnames=("block_size", "num_blocks"))
 @searched_whole(rows="x")
 def _measure(x_prev, x, surface, radius, mask, block_size: int, num_blocks: int) -> _Measured:
-    # Jitted: run op by op, this took 5-7 s at every new shape (measured).
+    # Jitted: run op by op, this takes 5-7 s at every new shape (measured).
     segments = _segments.resolve_segments(surface)
     if x_prev is not None:
         x_prev, x, slave_ok = _segments.sanitize_paths(x_prev, x, mask)
@@ -124,11 +124,12 @@ def _cells_for(extent, edge: float, num_kept: int, slack: float, chosen: bool):
     if chosen:
         if np.prod(np.ceil(extent * slack / edge) + 1) > most_cells:
             # Too many cells of this edge: they share that many lists through
-            # a hash (``_cells.flat_cell``), and are made ``slack`` times
+            # a hash (``cells.flat_cell``), and are made ``slack`` times
             # wider, so that a segment of the median extent spans at most two
-            # per axis. Growing the cells instead until the grid fitted gave
+            # per axis. Growing the cells instead until the grid fits gives
             # the curled chip's outline at 10^5 nodes cells 24 times its
-            # radius, up to 192 segments in a cell (RESULTS.md, "Bodies").
+            # radius, up to 192 segments in a cell (measured with the
+            # repository's benchmarks/bodies.py).
             edge *= slack
             buckets = size_class(most_cells)
         edge = _edge_class(edge)
@@ -240,7 +241,7 @@ def measure(
             cell_size = cell_factor * (2 * float(measured.reach) + float(np.median(lengths)))
         edge, grid_shape, buckets = _cells_for(extent, cell_size, len(points), slack, chosen)
         layout = None
-    # The cells the search places (``_cells.list_candidates``): the edge, or
+    # The cells the search places (``cells.list_candidates``): the edge, or
     # wider where the region outgrows the grid (never, for cells chosen here).
     cell = max(edge, float(np.max(extent / np.asarray(grid_shape))))
     widths = (np.asarray(measured.boxes.high) - np.asarray(measured.boxes.low))[ok]

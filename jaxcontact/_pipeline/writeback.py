@@ -66,8 +66,8 @@ def pack(result, listing: type, flag: str, rows: Array, capacity: int, num_rows:
     packed into ``capacity`` entries of ``listing``, in increasing slot order.
 
     ``rows`` (i32[S], increasing where real) is each slot's slave row. The N
-    rows are never written: where few slaves touch, writing them was most of
-    the call (40 % on the cutting scene at 10^6 rows).
+    rows are never written: where few slaves touch, writing them would be
+    most of the call (measured 40 % on the cutting scene at 10^6 rows).
     """
     at, valid, count = first_slots(getattr(result, flag), capacity)
 
@@ -97,11 +97,10 @@ def write_blocks(result, blocks: Blocks, empty, block_size: int):
     rows, 4.1-5.1 against 6.3-10 ms at 10^6) than a scatter of the blocks
     into padded rows of zeros (zeros written, copied where XLA shares them
     between fields, scattered into, then cut to N rows: three writes of
-    every row). Single rows measured slower than whole blocks: a gather (an
-    index per row) took 1.5x the old scatter's time at 81,939 rows, a
-    scatter 0.64x there and 1.0x at 10^6, where a gather of blocks took
-    0.56x and 0.73x; an earlier scatter of single rows was also fused by XLA
-    with the projection and recomputed per field.
+    every row). Single rows measured slower than whole blocks: against that
+    scatter of blocks, a gather (an index per row) took 1.5x its time at
+    81,939 rows and a scatter of single rows 0.64x there and 1.0x at 10^6,
+    where the gather of blocks took 0.56x and 0.73x.
     """
     num_rows = empty.segment.shape[0]
     num_blocks = -(-num_rows // block_size)
@@ -120,7 +119,7 @@ def write_blocks(result, blocks: Blocks, empty, block_size: int):
         tail = full.shape[1:]
         read = part.reshape((capacity, block_size) + tail)[jnp.maximum(slot, 0)]
         # The rows of ``empty`` are all alike: its first fills the blocks not
-        # kept, a constant XLA fuses (a padded copy of ``empty`` was written out).
+        # kept, a constant XLA fuses (rather than a padded copy of ``empty`` written out).
         fill = full[:1].reshape((1, 1) + tail)
         chosen = jnp.where(kept.reshape((num_blocks,) + (1,) * (len(tail) + 1)), read, fill)
         return chosen.reshape((num_blocks * block_size,) + tail)[:num_rows]

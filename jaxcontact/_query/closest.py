@@ -40,18 +40,17 @@ def prefer_outside(
     and only when it is outside BOTH at a concave one (right turn). So the
     face with the larger signed normal distance (x - v) . n is taken at a
     convex corner, the smaller at a concave one, and the gap's sign is that
-    face's. The first contract gave such ties to the lower index, which
-    reports slaves in the blind spot beyond a sharp convex corner (the tool
-    tip) as penetrating, and slaves inside a sharp concave notch as outside
-    (docs/contract.md, "Changes from the first contract"). Only
-    neighbours that share the node index are seen.
+    face's. Giving such ties to the lower index would report slaves in the
+    blind spot beyond a sharp convex corner (the tool tip) as penetrating,
+    and slaves inside a sharp concave notch as outside. Only neighbours
+    that share the node index are seen.
 
-    Only a neighbour the pair rule allows for the slave (``_pairs.allows``)
+    Only a neighbour the pair rule allows for the slave (``pairs.allows``)
     is a rival.
 
     ``vertex`` (i32[N]) is the node at the closest point when it is an end
     of the chosen segment, decided by the sign tests that clamp ``xi``
-    (``_geometry._offset``), and -1 on the face's interior: the tie keeps
+    (``geometry._offset``), and -1 on the face's interior: the tie keeps
     the node, whichever face it picks.
 
     ``sign`` (f[N]) is the gap's sign at a vertex tie (+1 or -1; 0 where
@@ -69,7 +68,7 @@ def prefer_outside(
     index = jnp.maximum(choice, 0)
     a, b = start[index], end[index]
     d = b - a
-    # The sign tests ``_geometry._offset`` clamps by: the closest point is an end.
+    # The sign tests ``geometry._offset`` clamps by: the closest point is an end.
     at_start = jax.vmap(dot)(x - a, d) <= 0
     at_end = jax.vmap(dot)(x - b, d) >= 0
     other = jnp.where(at_end, after[index], jnp.where(at_start, before[index], -1))
@@ -120,7 +119,7 @@ def contact_from_choice(
       radius: f[] search radius, or f[N] one per slave.
       overflow: bool[] passed through.
       row_ok: bool[N] real rows; the others are reported not found.
-      rule: the pair rule (``_pairs.Rule``) the search applied, or None, and
+      rule: the pair rule (``pairs.Rule``) the search applied, or None, and
       row_tags: the slaves' tags it read: the vertex tie rule asks it too.
     """
     choice = jax.lax.stop_gradient(choice)

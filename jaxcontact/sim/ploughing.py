@@ -288,8 +288,8 @@ def mean_cutting_force(mesh: Mesh, controls: Controls, config: Ploughing) -> Arr
     """f[]: the cutting force on the tool (its x part), averaged over the run.
 
     Differentiate it with ``jax.grad(mean_cutting_force, argnums=1)``: the
-    gradient runs back through the scan (tests/test_simulate.py checks it
-    against central differences).
+    gradient runs back through the scan (the repository's
+    tests/sim/test_simulate.py checks it against central differences).
 
     Example:
       >>> mesh, controls, config = ploughing(300, travel=0.1)

@@ -3,7 +3,7 @@
 ``scenes.cutting_tool_outline`` builds the outline in NumPy for one fixed
 rake angle; a simulation differentiated with respect to the rake angle needs
 the same geometry as a traced function. The two are kept equal by a test
-(tests/test_simulate.py) at the scene's 10°.
+(the repository's tests/sim/test_simulate.py) at the scene's 10°.
 """
 
 from __future__ import annotations
