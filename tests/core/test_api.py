@@ -284,3 +284,14 @@ def test_contact_forces_warns_and_equals_the_penalty():
     forces = penalty(contact, _surface(), 10.0)
     np.testing.assert_allclose(on_slaves, forces.on_slaves)
     np.testing.assert_allclose(on_master, jnp.sum(forces.on_master, axis=0), atol=1e-12)
+
+
+def test_the_wheel_lists_every_package_of_the_library_and_nothing_else():
+    import re
+
+    pyproject = (PACKAGE.parent / "pyproject.toml").read_text()
+    (line,) = re.findall(r"^packages = \[(.*)\]$", pyproject, flags=re.M)
+    listed = set(re.findall(r'"([\w.]+)"', line))
+    found = {_module_name(path) for path in PACKAGE.rglob("__init__.py")}
+    assert listed == found
+    assert not any("bench" in name for name in listed)
