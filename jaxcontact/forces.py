@@ -64,6 +64,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from jaxcontact._pipeline.placement import replicated
 from jaxcontact._track import Slip
 from jaxcontact._types import Array, Contact, ContactList, Surface
 
@@ -240,6 +241,9 @@ def penalty(
       >>> (forces.on_slaves + 0.0).tolist(), (forces.on_master + 0.0).tolist()  # no -0.0
       ([[0.0, 5.0]], [[0.0, -1.25], [0.0, -3.75]])
     """
+    # A result split over explicit mesh axes (``sharded``) is gathered: the
+    # reaction's scatter onto the master's nodes has no rule for split rows.
+    contact, surface, stiffness = replicated((contact, surface, stiffness))
     entries, num_slaves = _entries(contact, num_slaves)
     dtype = entries.gap.dtype
     stiffness = _per_entry("stiffness", stiffness, entries, num_slaves, dtype)

@@ -19,7 +19,7 @@ suite's time is XLA compiling. The older emitters give the same answers bit
 for bit and compile about a third faster than XLA's defaults; LLVM's
 optimisation off takes another third off the whole suite, and its
 floating-point results may differ from the optimised code's in the last
-bits (README, Development, has the measurements). Every test passed so but
+bits (docs/development.md has the measurements). Every test passed so but
 one, whose check depends on the optimised code (two routes of one
 arithmetic agreeing to the last bit): it compiles its program with XLA's
 defaults itself (tests/core/test_small_paths.py).

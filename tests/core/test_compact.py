@@ -197,15 +197,15 @@ def test_slaves_at_the_radius_to_within_rounding_are_found_as_the_dense_form_fin
     np.testing.assert_array_equal(entries.node[: found.sum()], np.flatnonzero(found))
 
 
-def test_readme_compact_snippet_gives_the_dense_forces():
+def test_the_guides_compact_snippet_gives_the_n_row_forces():
     import pathlib
     import re
     import textwrap
 
     import jaxcontact
 
-    readme = pathlib.Path(__file__).resolve().parents[2] / "README.md"
-    section = readme.read_text().split("### The search object")[1].split("\n### ")[0]
+    readme = pathlib.Path(__file__).resolve().parents[2] / "docs" / "guides" / "search.md"
+    section = readme.read_text().split("## Sizes, candidates and overflow")[1].split("\n## ")[0]
     (snippet,) = [s for s in re.findall(r"```python\n(.*?)```", section, re.S) if "compact" in s]
     scene = cutting_scene(2_000, 18.0, dtype=FLOAT)  # the programs of the tests above
     namespace = {"jaxcontact": jaxcontact, "jax": jax, "jnp": jnp, "stiffness": 10.0}
@@ -213,8 +213,9 @@ def test_readme_compact_snippet_gives_the_dense_forces():
     exec(compile(textwrap.dedent(snippet), str(readme), "exec"), namespace)
     dense = all_to_all(scene.x, scene.surface, radius=0.1)
     assert int(dense.active.sum()) > 0
-    want = jnp.where(dense.active, -10.0 * dense.gap, 0)[:, None] * dense.normal
-    tol = binned_tolerance(dense.gap.dtype, dense.point) * 10.0
+    stiffness = namespace["stiffness"]
+    want = jnp.where(dense.active, -stiffness * dense.gap, 0)[:, None] * dense.normal
+    tol = binned_tolerance(dense.gap.dtype, dense.point) * stiffness
     np.testing.assert_allclose(namespace["nodal"], want, rtol=0, atol=tol)
 
 

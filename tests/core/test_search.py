@@ -335,20 +335,3 @@ def test_settings_are_plain_numbers_and_a_batch_may_share_its_mask_and_segments(
     for b in range(2):
         expected = all_to_all(xs[b], Surface(nodes[b], segments), radius=0.1, mask=mask)
         assert_same_contact(jax.tree.map(lambda v, b=b: v[b], contacts), expected, 0.1)
-
-
-def test_readme_search_snippet_runs():
-    import pathlib
-    import re
-
-    import jaxcontact
-
-    readme = pathlib.Path(__file__).resolve().parents[2] / "README.md"
-    section = readme.read_text().split("### The search object")[1].split("\n### ")[0]
-    snippet = re.findall(r"```python\n(.*?)```", section, flags=re.S)[0]
-    scene = cutting_scene(2_000, 18.0, x_tip_prev=18.2)
-    namespace = {"jaxcontact": jaxcontact, "x": scene.x, "x_prev": scene.x_prev}
-    namespace["surface"] = scene.surface
-    exec(compile(snippet, str(readme), "exec"), namespace)
-    assert not bool(namespace["contact"].overflow)
-    assert int(namespace["crossing"].crossed.sum()) > 0

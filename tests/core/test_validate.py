@@ -84,16 +84,3 @@ def test_zero_length_segment_warns_naming_it():
 def test_traced_arguments_are_refused():
     with pytest.raises(ValueError, match="validate needs concrete arrays; x is traced"):
         jax.jit(lambda x: validate(x, SURFACE))(X)
-
-
-def test_readme_validate_example_runs():
-    import doctest
-    import pathlib
-
-    readme = (pathlib.Path(__file__).resolve().parents[2] / "README.md").read_text()
-    section = readme.split("### Checking inputs: `validate`")[1].split("\n### ")[0]
-    (example,) = re.findall(r"```python\n(.*?)```", section, flags=re.S)
-    test = doctest.DocTestParser().get_doctest(example, {}, "README validate", None, 0)
-    runner = doctest.DocTestRunner(optionflags=doctest.ELLIPSIS)
-    runner.run(test)
-    assert runner.failures == 0 and runner.tries == 4

@@ -24,6 +24,7 @@ from jaxcontact._pipeline import driver
 from jaxcontact._pipeline.sizes import measure
 from jaxcontact._query.closest import CLOSEST
 from jaxcontact._types import CELLS_ABOVE
+from jaxcontact.forces import penalty
 from jaxcontact.scenes import cutting_scene, rough_die_scene
 from tests.helpers import assert_same_contact, assert_same_crossing, penalty_total
 from tests.tolerances import FLOAT64_EXACT_ATOL, FLOAT64_RTOL
@@ -166,3 +167,13 @@ def test_fewer_rows_than_devices(mesh, num_rows):
     assert got.gap.shape == (num_rows,)
     for field, value in zip(one._fields, one, strict=True):
         np.testing.assert_array_equal(getattr(got, field), value, err_msg=field)
+
+
+def test_penalty_takes_a_result_split_over_the_mesh(mesh):
+    scene = _scene(1_100, jnp.float32)
+    contact = jax.jit(sharded(all_to_all, mesh))(scene.x, scene.surface, radius=RADIUS)
+    got = penalty(contact, scene.surface, 1e3)
+    want = penalty(all_to_all(scene.x, scene.surface, radius=RADIUS), scene.surface, 1e3)
+    assert bool(jnp.any(want.on_slaves != 0))
+    np.testing.assert_array_equal(got.on_master, want.on_master)
+    np.testing.assert_array_equal(got.on_slaves, want.on_slaves)
