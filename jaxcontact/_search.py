@@ -387,7 +387,7 @@ class Search:
         )
         surface = _batched_surface(surface, batch)
         pool = _batched("pool", pool, 1, batch)
-        pairing = Pairs(slave_node, slave_body, pairs.self_contact)
+        pairing = Pairs(slave_node, slave_body, pairs.self_contact, pairs.allow)
         first = jax.tree.map(lambda values: values[0], (x, surface, mask, pairing))
         self._pairing(*first)
         axes = (0, 0, None if mask is None else 0, jax.tree.map(lambda _: 0, pairing))

@@ -86,9 +86,8 @@ def exhaustive(query, points: tuple, surface: Surface, radius, mask, pairs: Pair
     radius = radius if per_row_radius is None else per_row_radius
     points, slave_ok = query.sanitize(points, mask)
     segments = resolve_segments(surface)
-    rule, tags, segments = tag(
-        pairs, segments, surface.body, query.pair_reach(points, slave_ok, radius)
-    )
+    reach = query.pair_reach(points, slave_ok, radius)
+    rule, tags, segments = tag(pairs, segments, surface.body, reach, points[0].shape[0])
     fixed = jax.lax.stop_gradient(((*points, tags), segments))
     search = one_scene_at_a_time(functools.partial(_lowest, ruled(query.kernel, rule)))
     choice = search(*fixed, slave_ok)
@@ -220,9 +219,8 @@ def sized(
     num_rows = points[0].shape[0]
     segments = resolve_segments(surface)
     low, high, cull_ok = query.row_boxes(points, mask)
-    rule, tags, segments = tag(
-        pairs, segments, surface.body, query.pair_reach(points, cull_ok, radius)
-    )
+    reach = query.pair_reach(points, cull_ok, radius)
+    rule, tags, segments = tag(pairs, segments, surface.body, reach, num_rows)
     capacity = sizes.contact_capacity
     dtype = points[0].dtype
     no_overflow = jnp.zeros((), bool)

@@ -43,6 +43,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import warnings
+from collections.abc import Callable
 from typing import NamedTuple
 
 import jax
@@ -65,12 +66,13 @@ class Rule:
     own_node: bool
     bodies: bool
     self_contact: bool
+    allow: object = None  # the user's own rule (``Pairs.allow``), or None
 
 
 @functools.partial(
     jax.tree_util.register_dataclass,
     data_fields=["slave_node", "slave_body"],
-    meta_fields=["self_contact"],
+    meta_fields=["self_contact", "allow"],
 )
 @dataclasses.dataclass(frozen=True)
 class Pairs:
@@ -93,6 +95,13 @@ class Pairs:
         (``SELF_CONTACT_REACH`` times its reach: the radius, or a path's
         length). Needs ``slave_node``; with no body labels the whole surface
         is one body.
+      allow: a rule of the user's own, the hook jax-md's neighbour lists
+        call ``custom_mask_function``: ``allow(slave, segment) -> bool``,
+        elementwise over i32 arrays of slave rows and segment indices of
+        matching shape (write it with ``jnp``; it is traced). A pair meets
+        only if ``allow`` and the rule above both let it. Static: hashed by
+        identity, so pass the same function each step (a new one compiles
+        anew).
 
     Example:
       >>> import jax.numpy as jnp
@@ -110,6 +119,7 @@ class Pairs:
     slave_node: Array | None = None  # i32[N]  surface node of each slave, -1 for none
     slave_body: Array | None = None  # i32[N]  body of each slave
     self_contact: bool = False
+    allow: Callable[[Array, Array], Array] | None = None
 
     def rule(self, body) -> Rule | None:
         """The ``Rule`` for a surface with labels ``body`` (or None): None if nothing applies."""
@@ -117,8 +127,10 @@ class Pairs:
             own_node=self.slave_node is not None,
             bodies=self.slave_body is not None and body is not None,
             self_contact=self.self_contact,
+            allow=self.allow,
         )
-        return rule if (rule.own_node or rule.bodies or rule.self_contact) else None
+        applies = rule.own_node or rule.bodies or rule.self_contact or rule.allow is not None
+        return rule if applies else None
 
 
 EVERY_PAIR = Pairs()
@@ -132,6 +144,7 @@ class RowTags(NamedTuple):
     chain: Array | None  # i32[N]  chain of the own node, -1 for none
     arc: Array | None  # f[N]  the own node's arc coordinate
     window: Array | None  # f[N]  arc length of the neighbourhood
+    index: Array | None = None  # i32[N]  the slave's row, for ``Pairs.allow``
 
 
 class SegmentTags(NamedTuple):
@@ -143,10 +156,11 @@ class SegmentTags(NamedTuple):
     low: Array | None  # f[M]  arc coordinate of the end node
     high: Array | None  # f[M]  arc coordinate of the start node
     loop: Array | None  # f[M]  the chain's length if closed, else inf
+    index: Array | None = None  # i32[M]  the segment's index, for ``Pairs.allow``
 
 
-def tag(pairs: Pairs, segments: Segments, body, reach: Array):
-    """``(rule, row tags, segments with their tags)`` for one search.
+def tag(pairs: Pairs, segments: Segments, body, reach: Array, num_rows: int):
+    """``(rule, row tags, segments with their tags)`` for one search of ``num_rows`` slaves.
 
     ``reach`` (f[] or f[N]) is each slave's reach: the self-contact window is
     ``SELF_CONTACT_REACH`` times it. Tags carry no gradient. With no rule,
@@ -171,8 +185,12 @@ def tag(pairs: Pairs, segments: Segments, body, reach: Array):
         arc = outline.node_arc[at] if num_nodes else jnp.zeros(node.shape, reach.dtype)
         window = jnp.broadcast_to(SELF_CONTACT_REACH * reach, node.shape)
         segment_chain, low, high, loop = outline.chain, outline.low, outline.high, outline.loop
-    rows = RowTags(node, body_of_row, chain, arc, window)
-    tags = SegmentTags(nodes, segment_body, segment_chain, low, high, loop)
+    row_index = segment_index = None
+    if rule.allow is not None:
+        row_index = jnp.arange(num_rows, dtype=jnp.int32)
+        segment_index = jnp.arange(segments.ok.shape[0], dtype=jnp.int32)
+    rows = RowTags(node, body_of_row, chain, arc, window, row_index)
+    tags = SegmentTags(nodes, segment_body, segment_chain, low, high, loop, segment_index)
     rows, tags = jax.lax.stop_gradient((rows, tags))
     return rule, rows, dataclasses.replace(segments, tags=tags)
 
@@ -191,6 +209,8 @@ def allows(rule: Rule | None, row: RowTags, segment: SegmentTags) -> Array:
         ok = ok & ~((row.chain == segment.chain) & (apart < row.window))
     elif rule.bodies:
         ok = ok & (row.body != segment.body)
+    if rule.allow is not None:
+        ok = ok & jnp.asarray(rule.allow(row.index, segment.index), bool)
     return ok
 
 
@@ -265,4 +285,6 @@ def check(pairs, x, surface: Surface, mask, stacklevel: int = 3, **keywords) -> 
                 f"Pairs.slave_node must be -1 or index surface.nodes, in [-1, {num_nodes - 1}]; "
                 f"got {int(values[bad][0])}"
             )
-    return Pairs(slave_node, slave_body, pairs.self_contact)
+    if pairs.allow is not None and not callable(pairs.allow):
+        raise ValueError(f"Pairs.allow must be a function or None; got {pairs.allow!r}")
+    return Pairs(slave_node, slave_body, pairs.self_contact, pairs.allow)

@@ -295,3 +295,43 @@ def test_the_wheel_lists_every_package_of_the_library_and_nothing_else():
     found = {_module_name(path) for path in PACKAGE.rglob("__init__.py")}
     assert listed == found
     assert not any("bench" in name for name in listed)
+
+
+def _not_segment_one_for_even_rows(slave, segment):
+    return (segment != 1) | (slave % 2 == 1)
+
+
+@pytest.mark.parametrize("form", ["all_to_all", "bucket_sort", "Search", "swept", "bucket_swept"])
+def test_a_users_own_rule_composes_with_pairs(form):
+    rule = Pairs(allow=_not_segment_one_for_even_rows)
+    x = np.array([[1.5, -0.1], [1.5, -0.05], [1.4, -0.05], [1.6, -0.1]])
+    x_prev = x + np.array([0.0, 0.3])
+    without = Surface(NODES, SEGMENTS, np.array([True, False, True]))
+    if form in ("swept", "bucket_swept"):
+        detect = getattr(jaxcontact, form)
+        got, plain, masked = (
+            detect(x_prev, x, surface, pairs=pairs)
+            for surface, pairs in ((_surface(), rule), (_surface(), None), (without, None))
+        )
+    elif form == "Search":
+        search = Search(radius=RADIUS, compact=True)
+        state = search.allocate(x, _surface(), pairs=rule)
+        got = search.closest(state, x, _surface(), pairs=rule)[0].to_contact(len(x))
+        plain = all_to_all(x, _surface(), radius=RADIUS)
+        masked = all_to_all(x, without, radius=RADIUS)
+    else:
+        detect = getattr(jaxcontact, form)
+        got, plain, masked = (
+            detect(x, surface, radius=RADIUS, pairs=pairs)
+            for surface, pairs in ((_surface(), rule), (_surface(), None), (without, None))
+        )
+    odd = np.arange(len(x)) % 2 == 1
+    segment, plain_segment = np.asarray(got.segment), np.asarray(plain.segment)
+    np.testing.assert_array_equal(segment[odd], plain_segment[odd])
+    np.testing.assert_array_equal(segment[~odd], np.asarray(masked.segment)[~odd])
+    assert (plain_segment == 1).all() and not (segment[~odd] == 1).any()
+
+
+def test_a_users_rule_must_be_a_function():
+    with pytest.raises(ValueError, match="Pairs.allow must be a function or None"):
+        all_to_all(X, _surface(), radius=RADIUS, pairs=Pairs(allow=3))
