@@ -128,12 +128,11 @@ def _choose_if(kernel, sizes: Sizes, go, queries: Queries, segments: Segments, b
     return in_stages(go, [search], [(no_choice, jnp.zeros((), bool))])
 
 
-def _as_rows(query, kept: _Kept, chosen, segments, ruling, blocks: Blocks, sizes: Sizes, go):
-    """The N-row result: the kept slaves assembled, then written into their rows.
+def _as_rows(query, kept: _Kept, chosen, segments, ruling, blocks: Blocks, sizes, go, num_rows):
+    """The N-row result: the kept slaves assembled, then written into their ``num_rows`` rows.
 
     Assembly and write are each skipped when no block was kept.
     """
-    num_rows = sizes.num_slaves
     dtype = kept.points[0].dtype
     no_overflow = jnp.zeros((), bool)
 
@@ -152,7 +151,7 @@ def _as_rows(query, kept: _Kept, chosen, segments, ruling, blocks: Blocks, sizes
     return in_stages(go, [assemble, write], list(skipped), chosen)
 
 
-def _as_entries(query, kept: _Kept, chosen, segments, ruling, sizes: Sizes, go):
+def _as_entries(query, kept: _Kept, chosen, segments, ruling, sizes: Sizes, go, num_rows):
     """``(the K-entry result, i32[] entries needed)``: only the kept slaves
     that may hold an answer (``query.reportable``) are assembled, at most K
     of them, then the answered ones packed.
@@ -161,7 +160,7 @@ def _as_entries(query, kept: _Kept, chosen, segments, ruling, sizes: Sizes, go):
     pair evaluation into each field's gather and run it once per field
     (2x slower at 81,939 rows).
     """
-    capacity, num_rows = sizes.contact_capacity, sizes.num_slaves
+    capacity = sizes.contact_capacity
     dtype = kept.points[0].dtype
     no_overflow = jnp.zeros((), bool)
 
@@ -250,9 +249,9 @@ def sized(
     chosen = search(go, *fixed, listed)
     ruling = (rule, kept.tags)
     if not capacity:
-        result = _as_rows(query, kept, chosen, segments, ruling, blocks, sizes, go)
+        result = _as_rows(query, kept, chosen, segments, ruling, blocks, sizes, go, num_rows)
         return result._replace(overflow=result.overflow | overflow)
-    result, needed = _as_entries(query, kept, chosen, segments, ruling, sizes, go)
+    result, needed = _as_entries(query, kept, chosen, segments, ruling, sizes, go, num_rows)
     result = result._replace(overflow=result.overflow | overflow)
     return (result, needed) if with_needed else result
 
