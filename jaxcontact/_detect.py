@@ -17,6 +17,7 @@ the form that keeps its sizes in the caller's hands.
 from __future__ import annotations
 
 import collections
+import dataclasses
 import threading
 from collections.abc import Callable
 
@@ -293,7 +294,8 @@ def _bucket(query, points, surface, radius, mask, pairs, compact: bool, sizes_no
         sizes = room_for_every_slot(sizes) if compact else sizes
         return driver.sized_jit(query, points, surface, radius, mask, sizes=sizes, pairs=pairs)
 
-    signature = _signature(points, mask, surface, radius, pairs)
+    # Sizes do not depend on the user's own rule: the key holds no reference to it.
+    signature = _signature(points, mask, surface, radius, dataclasses.replace(pairs, allow=None))
     key = (query.name, compact, use_cells, signature)
     return _with_kept_sizes(key, lambda: sizes_now(use_cells), search)
 

@@ -347,21 +347,7 @@ class Search:
 
     def _replaced(self, pairs, replaced: dict) -> Pairs:
         """``pairs`` with the replaced keywords folded in (they warn), unchecked."""
-        unknown = set(replaced) - {"slave_node", "slave_body"}
-        if unknown:
-            raise TypeError(f"unexpected keyword arguments {sorted(unknown)}")
-        pairs = Pairs() if pairs is None else pairs
-        if not isinstance(pairs, Pairs):
-            raise ValueError(f"pairs must be a jaxcontact.Pairs; got {type(pairs).__name__}")
-        given = {name: value for name, value in replaced.items() if value is not None}
-        if given:
-            words = ", ".join(f"{name}=" for name in given)
-            warnings.warn(
-                f"the keywords {words} are replaced by pairs=jaxcontact.Pairs({words}...)",
-                DeprecationWarning,
-                stacklevel=3,
-            )
-            pairs = dataclasses.replace(pairs, **given)
+        pairs = _pairs.folded(pairs, replaced, 3, allowed=("slave_node", "slave_body"))
         if self.self_contact and not pairs.self_contact:
             pairs = dataclasses.replace(pairs, self_contact=True)
         return pairs
@@ -477,9 +463,8 @@ class Search:
             return dataclasses.replace(sizes, contact_capacity=0)
         radius = jnp.asarray(self.radius, x.dtype)
         axes = None if axes is None else ((axes[0],), *axes[1:])
-        measured = _sizes.with_entries(
-            CLOSEST, (x,), surface, radius, mask, sizes, self.slack, pairing, axes
-        )
+        needed = driver.entries_needed(CLOSEST, (x,), surface, radius, mask, sizes, pairing, axes)
+        measured = _sizes.with_entries(sizes, needed, self.slack)
         return self._merged(measured, at_least, "sizes")
 
     def _path_room(self, sizes: Sizes, x_prev, x, surface, mask, at_least, pairing, axes=None):
@@ -488,9 +473,10 @@ class Search:
         if not self.compact:
             return sizes
         axes = None if axes is None else ((axes[0], axes[0]), *axes[1:])
-        measured = _sizes.with_entries(
-            SWEPT, (x_prev, x), surface, None, mask, sizes, self.slack, pairing, axes
+        needed = driver.entries_needed(
+            SWEPT, (x_prev, x), surface, None, mask, sizes, pairing, axes
         )
+        measured = _sizes.with_entries(sizes, needed, self.slack)
         return self._merged(measured, at_least, "path_sizes")
 
     @property
@@ -664,14 +650,14 @@ class Search:
         """
         _check_state_type(state)
         points, surface, _, mask = SWEPT.check((x_prev, x), surface, None, mask)
-        pairing = self._pairing(x, surface, mask, self._replaced(pairs, replaced))
+        pairing = self._pairing(points[-1], surface, mask, self._replaced(pairs, replaced))
         if self.method == "exhaustive":
             return driver.exhaustive(SWEPT, points, surface, None, mask, pairing), state
         if state.path_sizes is None:
             raise ValueError("state has no path sizes: allocate it with x_prev=")
         _check_unbatched(state, "swept")
         sizes = state.path_sizes
-        _sizes.check_sizes(sizes, x.shape[0], for_paths=True)
+        _sizes.check_sizes(sizes, points[-1].shape[0], for_paths=True)
         self._check_form(sizes)
         crossing = driver.sized_jit(SWEPT, points, surface, None, mask, sizes=sizes, pairs=pairing)
         return crossing, dataclasses.replace(state, overflow=state.overflow | crossing.overflow)

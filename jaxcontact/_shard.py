@@ -107,7 +107,14 @@ def sharded(detector, mesh: Mesh, *, axis: str | None = None):
         per_row = [k for k in ("slave_node", "slave_body") if kwargs.get(k) is not None]
         per_row += ["radius"] if np.ndim(kwargs.get("radius", 0)) else []
         per_row += ["self_contact"] if kwargs.get("self_contact") else []
-        per_row += ["pairs"] if kwargs.get("pairs") is not None else []
+        rule = kwargs.get("pairs")
+        every_pair = rule is None or (
+            rule.slave_node is None
+            and rule.slave_body is None
+            and not rule.self_contact
+            and rule.allow is None
+        )
+        per_row += [] if every_pair else ["pairs"]
         if per_row:
             raise ValueError(
                 f"sharded(...) splits the slave arrays only: {', '.join(per_row)} "
@@ -115,6 +122,7 @@ def sharded(detector, mesh: Mesh, *, axis: str | None = None):
                 "sharded with jax.sharding straight to the detector instead"
             )
         kwargs.pop("self_contact", None)
+        kwargs.pop("pairs", None)  # every pair: the detector's default
         *points, surface = args
         if not points:
             raise ValueError("sharded(detector) needs the slave arrays before the surface")

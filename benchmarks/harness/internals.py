@@ -71,7 +71,8 @@ def sized_bucket_swept(x_prev, x, surface, *, mask=None, sizes, pairs=None):
 def measure_contacts(x, surface, radius, mask, sizes, slack):
     """``sizes`` with the compact closest form's capacity measured."""
     radius = jnp.asarray(radius, x.dtype)
-    return with_entries(CLOSEST, (x,), surface, radius, mask, sizes, slack, EVERY_PAIR)
+    needed = driver.entries_needed(CLOSEST, (x,), surface, radius, mask, sizes, EVERY_PAIR)
+    return with_entries(sizes, needed, slack)
 
 
 def empty_contact(template, overflow):

@@ -35,6 +35,7 @@ from jaxcontact._pipeline.narrow import Queries, choose, in_stages, search_all, 
 from jaxcontact._pipeline.pairs import EVERY_PAIR, Pairs, pick, ruled, tag
 from jaxcontact._pipeline.placement import searched_whole
 from jaxcontact._pipeline.segments import Segments, resolve_segments
+from jaxcontact._pipeline.sizes import room_for_every_slot
 from jaxcontact._types import Array, Sizes, Surface
 
 # -- every slave against every segment ---------------------------------------
@@ -258,3 +259,24 @@ def sized(
 
 # One program per query, shape and sizes, called plainly or inlined under jit.
 sized_jit = jax.jit(sized, static_argnums=0, static_argnames=("sizes", "with_needed"))
+
+
+def entries_needed(query, points, surface, radius, mask, sizes: Sizes, pairs, axes=None):
+    """i32[] (i32[B] with ``axes``): the entries ``query``'s list form needs
+    for this data (the kept slaves it assembles: ``query.reportable``).
+
+    Runs the list form with an entry for every kept slave (a program of its
+    own). ``axes``: ``vmap``'s ``in_axes`` of ``points, surface, mask,
+    pairs`` for a batch (the points a tuple mapped alike).
+    """
+    wide = room_for_every_slot(sizes)
+
+    def count(points, surface, mask, pairs):
+        found = sized_jit(
+            query, points, surface, radius, mask, sizes=wide, with_needed=True, pairs=pairs
+        )
+        return found[1]
+
+    if axes is not None:
+        count = jax.vmap(count, axes)
+    return count(points, surface, mask, pairs)

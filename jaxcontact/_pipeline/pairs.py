@@ -101,7 +101,8 @@ class Pairs:
         matching shape (write it with ``jnp``; it is traced). A pair meets
         only if ``allow`` and the rule above both let it. Static: hashed by
         identity, so pass the same function each step (a new one compiles
-        anew).
+        anew). It may also be called on padding (rows past N, segments
+        past M, empty slots); those answers are masked out.
 
     Example:
       >>> import jax.numpy as jnp
@@ -242,29 +243,38 @@ def pick(tags, index: Array):
 PAIR_KEYWORDS = ("slave_node", "slave_body", "self_contact")
 
 
+def folded(pairs, keywords: dict, stacklevel: int, allowed=PAIR_KEYWORDS) -> Pairs:
+    """``pairs`` (a ``Pairs`` or None) with the replaced keywords folded in,
+    unchecked. Each replaced keyword passed warns, whatever its value; one
+    passed beside ``pairs=`` is a ``TypeError`` (which would win is not clear)."""
+    unknown = set(keywords) - set(allowed)
+    if unknown:
+        raise TypeError(f"unexpected keyword arguments {sorted(unknown)}")
+    if keywords and pairs is not None:
+        raise TypeError(
+            f"pass the pair rule as pairs= alone; got pairs= and {sorted(keywords)} too"
+        )
+    pairs = EVERY_PAIR if pairs is None else pairs
+    if not isinstance(pairs, Pairs):
+        raise ValueError(f"pairs must be a jaxcontact.Pairs; got {type(pairs).__name__}")
+    if keywords:
+        words = ", ".join(f"{name}=" for name in keywords)
+        warnings.warn(
+            f"the keywords {words} are replaced by pairs=jaxcontact.Pairs({words}...)",
+            DeprecationWarning,
+            stacklevel=stacklevel + 1,
+        )
+        given = {name: value for name, value in keywords.items() if value is not None}
+        pairs = dataclasses.replace(pairs, **given)
+    return pairs
+
+
 def check(pairs, x, surface: Surface, mask, stacklevel: int = 3, **keywords) -> Pairs:
     """``pairs`` checked against the slaves ``x`` (f[N, 2]), the master
     ``surface`` and the slave ``mask``; the replaced keywords (``keywords``:
     ``slave_node``, ``slave_body``, ``self_contact``) folded in with a
-    ``DeprecationWarning``."""
-    given = {
-        name: value for name, value in keywords.items() if value is not None and value is not False
-    }
-    unknown = set(keywords) - set(PAIR_KEYWORDS)
-    if unknown:
-        raise TypeError(f"unexpected keyword arguments {sorted(unknown)}")
-    if pairs is None:
-        pairs = EVERY_PAIR
-    if not isinstance(pairs, Pairs):
-        raise ValueError(f"pairs must be a jaxcontact.Pairs; got {type(pairs).__name__}")
-    if given:
-        words = ", ".join(f"{name}=" for name in given)
-        warnings.warn(
-            f"the keywords {words} are replaced by pairs=jaxcontact.Pairs({words}...)",
-            DeprecationWarning,
-            stacklevel=stacklevel,
-        )
-        pairs = dataclasses.replace(pairs, **given)
+    ``DeprecationWarning`` (``folded``)."""
+    pairs = folded(pairs, keywords, stacklevel)
     if not isinstance(pairs.self_contact, bool):
         raise ValueError(f"Pairs.self_contact must be a bool; got {pairs.self_contact!r}")
     if pairs.self_contact and pairs.slave_node is None:

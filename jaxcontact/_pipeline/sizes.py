@@ -20,7 +20,6 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxcontact._pipeline import driver
 from jaxcontact._pipeline import inputs as _inputs
 from jaxcontact._pipeline import segments as _segments
 from jaxcontact._pipeline.broad import (
@@ -344,35 +343,12 @@ def room_for_every_slot(sizes: Sizes) -> Sizes:
     return dataclasses.replace(sizes, contact_capacity=max(1, sizes.slave_capacity))
 
 
-def entries_needed(query, points, surface, radius, mask, sizes: Sizes, pairs) -> Array:
-    """i32[]: the entries ``query``'s list form needs for this data (the
-    kept slaves it assembles: ``query.reportable``).
-
-    Runs the list form with an entry for every kept slave (a program of its
-    own); ``vmap`` it for a batch.
-    """
-    wide = room_for_every_slot(sizes)
-    found = driver.sized_jit(
-        query, points, surface, radius, mask, sizes=wide, with_needed=True, pairs=pairs
-    )
-    return found[1]
-
-
-def with_entries(
-    query, points, surface, radius, mask, sizes: Sizes, slack: float, pairs, axes=None
-) -> Sizes:
-    """``sizes`` with the list form's capacity: the entries needed now times
-    ``slack`` (at least 1), as ``measure`` sizes the rest (concrete inputs).
-    With ``axes`` (``vmap``'s ``in_axes`` of ``points, surface, mask,
-    pairs``, the points a tuple mapped alike), the largest need of a batch."""
-
-    def count(points, surface, mask, pairs):
-        return entries_needed(query, points, surface, radius, mask, sizes, pairs)
-
-    if axes is not None:
-        count = jax.vmap(count, axes)
-    needed = int(np.max(np.asarray(count(points, surface, mask, pairs))))
-    return dataclasses.replace(sizes, contact_capacity=grow(needed, slack))
+def with_entries(sizes: Sizes, needed, slack: float) -> Sizes:
+    """``sizes`` with the list form's capacity: the most entries ``needed``
+    (i32[] or i32[B], ``driver.entries_needed``) times ``slack``, at least 1,
+    as ``measure`` sizes the rest."""
+    most = int(np.max(np.asarray(needed)))
+    return dataclasses.replace(sizes, contact_capacity=grow(most, slack))
 
 
 def merged(sizes: Sizes, old: Sizes | None) -> Sizes:

@@ -21,7 +21,13 @@ names them:
 
 The write-back into N rows or K entries reads only the result types' fields,
 so it is the same for every query. A third query (say, the closest node of
-the master) is a new subclass of ``Query`` and nothing else.
+the master: ``tests/core/test_query.py``) is a new subclass of ``Query``
+and nothing else, if its result types follow the conventions the write-back
+reads (``_pipeline.writeback``): a ``segment`` field (i32, -1 for none), the
+flag named by ``flag``, ``overflow`` last; index fields named ``segment`` or
+``vertex`` hold -1 where nothing was found, flags (``found``, ``active``,
+``crossed``) False, ``point`` and ``normal`` are f[..., 2], other fields
+f[...] zeros; the list type has a leading ``node`` (the slave row).
 
 A query is a stateless singleton: hashable, passed to ``jit`` as static.
 """

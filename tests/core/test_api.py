@@ -335,3 +335,30 @@ def test_a_users_own_rule_composes_with_pairs(form):
 def test_a_users_rule_must_be_a_function():
     with pytest.raises(ValueError, match="Pairs.allow must be a function or None"):
         all_to_all(X, _surface(), radius=RADIUS, pairs=Pairs(allow=3))
+
+
+def test_pairs_and_a_replaced_keyword_together_are_refused():
+    with pytest.raises(TypeError, match="pass the pair rule as pairs= alone"):
+        all_to_all(X, _surface(), radius=RADIUS, pairs=Pairs(SLAVE_NODE), slave_node=SLAVE_NODE)
+    with pytest.raises(TypeError, match="pass the pair rule as pairs= alone"):
+        Search(radius=RADIUS).allocate(X, _surface(), pairs=Pairs(), slave_body=SLAVE_NODE)
+
+
+def test_a_replaced_keyword_warns_whatever_its_value():
+    with pytest.warns(DeprecationWarning, match="self_contact="):
+        all_to_all(X, _surface(), radius=RADIUS, self_contact=False)
+    with pytest.warns(DeprecationWarning, match="slave_node="):
+        swept(X_PREV, X, _surface(), slave_node=None)
+
+
+def test_search_steps_take_plain_lists_as_the_one_call_forms_do():
+    search = Search(radius=RADIUS)
+    state = search.allocate(X, _surface(), x_prev=X_PREV)
+    crossing, _ = search.swept(state, X_PREV.tolist(), X.tolist(), _surface())
+    np.testing.assert_array_equal(crossing.segment, swept(X_PREV, X, _surface()).segment)
+
+
+def test_sharded_takes_the_default_pair_rule():
+    mesh = jax.make_mesh((1,), ("slaves",))
+    got = jaxcontact.sharded(all_to_all, mesh)(X, _surface(), radius=RADIUS, pairs=Pairs())
+    np.testing.assert_array_equal(got.segment, all_to_all(X, _surface(), radius=RADIUS).segment)
