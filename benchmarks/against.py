@@ -9,9 +9,12 @@ revision is extracted with ``git archive`` and imported as
 ``jaxcontact_against``. Both trees run in the same process on the same
 inputs, so load on a shared machine falls on both alike: read the ratio
 column (this tree's median over the other's; above 1 is slower), not the
-times across runs.
+times across runs, and set it beside the ``itself`` column: a second,
+separately jitted copy of this tree's form in the same rounds, over the
+first (the spread of one program against itself, the run's noise floor).
 
-The forms: ``all_to_all`` and ``swept`` jitted, a ``Search.closest`` step
+The forms: ``all_to_all`` and ``swept`` jitted (where N x M is at most
+``EXHAUSTIVE_PAIRS``), a ``Search.closest`` step
 jitted (no skin: the whole bucket sort every call, the N-row and the compact
 form), a step with the candidates reused (``skin = radius / 2``), and a
 ``Search.swept`` step. Each pair of answers is compared row for row
@@ -53,6 +56,8 @@ SCENES = {
     "rough die 10^5 x 10^4": lambda: rough_die_scene(100_000, 10_000),
 }
 QUICK = ("cutting 10^4", "rough die 10^4 x 10^3")
+# The exhaustive forms are timed where they take under a second or so.
+EXHAUSTIVE_PAIRS = 10**8
 
 
 def extracted(revision: str):
@@ -79,13 +84,13 @@ def forms(package, scene) -> dict:
     radius = float(scene.radius)
     x_prev = scene.x_prev if scene.x_prev is not None else scene.x
     scene = scene._replace(surface=package.Surface(*scene.surface))
-    calls = {
-        "all_to_all": (
+    calls = {}
+    if scene.x.shape[0] * scene.surface.segments.shape[0] <= EXHAUSTIVE_PAIRS:
+        calls["all_to_all"] = (
             jax.jit(lambda x, s: package.all_to_all(x, s, radius=radius)),
             (scene.x, scene.surface),
-        ),
-        "swept": (jax.jit(package.swept), (x_prev, scene.x, scene.surface)),
-    }
+        )
+        calls["swept"] = (jax.jit(package.swept), (x_prev, scene.x, scene.surface))
     searches = {
         "Search.closest": package.Search(radius=radius),
         "Search.closest compact": package.Search(radius=radius, compact=True),
@@ -143,15 +148,20 @@ def compared(new, old, num_rows: int) -> str:
 def run_scene(name: str, then, repeats: int) -> list[tuple]:
     scene = SCENES[name]()
     new, old = forms(jaxcontact, scene), forms(then, scene)
+    # A second, separately jitted copy of this tree's form: the spread of one
+    # program against itself, in the same rounds, is the run's noise floor.
+    again = forms(jaxcontact, scene)
     calls = {}
     for form in new:
         calls[(form, "this tree")] = new[form]
         calls[(form, "against")] = old[form]
+        calls[(form, "again")] = again[form]
     timings = time_interleaved(calls, repeats=repeats)
     rows = []
     num_rows = scene.x.shape[0]
     for form in new:
         now, before = timings[(form, "this tree")], timings[(form, "against")]
+        itself = timings[(form, "again")]
         check = compared(new[form][0](*new[form][1]), old[form][0](*old[form][1]), num_rows)
         program = same_program(new[form], old[form])
         rows.append(
@@ -161,6 +171,7 @@ def run_scene(name: str, then, repeats: int) -> list[tuple]:
                 now.median_s * 1e3,
                 before.median_s * 1e3,
                 now.median_s / before.median_s,
+                itself.median_s / now.median_s,
                 now.compile_s,
                 before.compile_s,
                 check,
@@ -172,13 +183,13 @@ def run_scene(name: str, then, repeats: int) -> list[tuple]:
 
 def table(rows, revision: str) -> str:
     head = (
-        f"| scene | form | this tree (ms) | {revision} (ms) | ratio | compile (s) | "
+        f"| scene | form | this tree (ms) | {revision} (ms) | ratio | itself | compile (s) | "
         f"compile {revision} (s) | answers | XLA program |\n"
-        "|---|---|---|---|---|---|---|---|---|\n"
+        "|---|---|---|---|---|---|---|---|---|---|\n"
     )
     body = "".join(
-        f"| {s} | {f} | {a:.3f} | {b:.3f} | {r:.2f} | {c:.2f} | {d:.2f} | {k} | {p} |\n"
-        for s, f, a, b, r, c, d, k, p in rows
+        f"| {s} | {f} | {a:.3f} | {b:.3f} | {r:.2f} | {i:.2f} | {c:.2f} | {d:.2f} | {k} | {p} |\n"
+        for s, f, a, b, r, i, c, d, k, p in rows
     )
     return head + body
 
@@ -196,7 +207,7 @@ def main(argv=None):
     rows = []
     for name in names:
         rows += run_scene(name, then, repeats)
-        print(table(rows[-6:], args.against), flush=True)
+        print(table(rows, args.against), flush=True)
     report = (
         f"# This tree against {args.against}\n\n{machine()}\n\n"
         f"`python benchmarks/against.py --against {args.against}`\n\n" + table(rows, args.against)
