@@ -1,14 +1,14 @@
-"""A griffe extension (mkdocstrings): a class field's trailing comment is its docstring.
+"""A griffe extension (mkdocstrings): a class field's trailing comment documents it.
 
 jaxcontact's NamedTuples state each field's dtype and shape in a comment on the
 field's line (``gap: Array  # f[N]  signed gap``). Griffe reads docstrings, not
 comments, so without this the API reference would list the fields bare; reading
-the comment keeps the source the one place those shapes are written.
+the comment keeps the source the one place those shapes are written. The fields
+become an ``Attributes:`` table under the class's description.
 """
 
 from __future__ import annotations
 
-import ast
 import io
 import re
 import tokenize
@@ -20,18 +20,37 @@ SHAPE = re.compile(r"^(\w+\[[^\]]*\])\s*(.*)$", re.S)
 
 
 class FieldComments(griffe.Extension):
-    def on_attribute_instance(self, *, node, attr: griffe.Attribute, agent, **kwargs) -> None:
-        # Only a class body's annotated fields without a docstring of their own; a
-        # module constant's comment is usually about the code, not the value.
-        if attr.docstring is not None or not isinstance(node, ast.AnnAssign):
+    def on_class_members(self, *, node, cls: griffe.Class, agent, **kwargs) -> None:
+        # A class body's annotated fields without a docstring of their own; a method's
+        # or a constant's comment is usually about the code, not the value.
+        fields = [
+            (name, _trailing_comment(member.source))
+            for name, member in cls.members.items()
+            if member.is_attribute
+            and not member.is_alias
+            and member.annotation is not None
+            and member.docstring is None
+            and member.source.lstrip().startswith(f"{name}:")  # not self.name in a method
+        ]
+        fields = [(name, comment) for name, comment in fields if comment]
+        if not fields:
             return
-        if attr.parent is None or not attr.parent.is_class:
+        text = cls.docstring.value if cls.docstring else ""
+        if re.search(r"^\s*Attributes:\s*$", text, re.M):
+            # The class lists its attributes itself: each comment stays with its field.
+            for name, comment in fields:
+                member = cls.members[name]
+                member.docstring = griffe.Docstring(
+                    _as_markdown(comment), lineno=member.lineno, parent=member
+                )
             return
-        comment = _trailing_comment(attr.source)
-        if comment:
-            attr.docstring = griffe.Docstring(
-                _as_markdown(comment), lineno=attr.lineno, parent=attr
-            )
+        # One table of the fields under the class's description, as an ``Attributes:``
+        # section would give; the fields themselves stay undocumented, so mkdocstrings
+        # (show_if_no_docstring: false) does not list them a second time, one heading each.
+        section = "\n".join(f"    {name}: {_as_markdown(comment)}" for name, comment in fields)
+        text = f"{text}\n\nAttributes:\n{section}" if text else f"Attributes:\n{section}"
+        lineno = cls.docstring.lineno if cls.docstring else cls.lineno
+        cls.docstring = griffe.Docstring(text, lineno=lineno, parent=cls)
 
 
 def _trailing_comment(source: str) -> str:
