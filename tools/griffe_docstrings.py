@@ -1,10 +1,16 @@
-"""A griffe extension (mkdocstrings): a class field's trailing comment documents it.
+"""A griffe extension (mkdocstrings): jaxcontact's docstring conventions, as griffe reads them.
+
+A class field's trailing comment documents it, and ``Example:`` is an examples section.
 
 jaxcontact's NamedTuples state each field's dtype and shape in a comment on the
 field's line (``gap: Array  # f[N]  signed gap``). Griffe reads docstrings, not
 comments, so without this the API reference would list the fields bare; reading
 the comment keeps the source the one place those shapes are written. The fields
 become an ``Attributes:`` table under the class's description.
+
+The docstrings head their doctests ``Example:``, which Google style (Napoleon) reads as
+``Examples:``; griffe knows the plural only and would show the singular's doctest as
+an admonition of quoted prose, so it is renamed before griffe parses it.
 """
 
 from __future__ import annotations
@@ -17,9 +23,14 @@ import griffe
 
 # The leading ``dtype[shape]`` of a field comment (``f[N, 2]``, ``i32[M]``, ``bool[]``).
 SHAPE = re.compile(r"^(\w+\[[^\]]*\])\s*(.*)$", re.S)
+EXAMPLE = re.compile(r"^(\s*)Example:\s*$", re.M)
 
 
-class FieldComments(griffe.Extension):
+class JaxcontactDocstrings(griffe.Extension):
+    def on_instance(self, *, node, obj: griffe.Object, agent, **kwargs) -> None:
+        if obj.docstring is not None:
+            obj.docstring.value = EXAMPLE.sub(r"\1Examples:", obj.docstring.value)
+
     def on_class_members(self, *, node, cls: griffe.Class, agent, **kwargs) -> None:
         # A class body's annotated fields without a docstring of their own; a method's
         # or a constant's comment is usually about the code, not the value.
