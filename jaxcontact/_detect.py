@@ -194,7 +194,8 @@ def bucket_sort(
         entry for every slave the cull kept (``Search(compact=True)``
         measures a tighter capacity once and reuses it).
       pairs: the pair rule, as for ``all_to_all``.
-      normals, corner: flat or smooth normals, as for ``all_to_all``.
+      normals: flat or smooth normals, as for ``all_to_all``.
+      corner: the corner angle of smooth normals, as for ``all_to_all``.
       **replaced: the replaced pair keywords, as for ``all_to_all``.
 
     Returns:

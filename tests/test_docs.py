@@ -40,6 +40,11 @@ SMALLER = {
 # page -> what its blocks must have left in their namespace.
 CHECKS = {
     "README.md": lambda ns: int(ns["contact"].active.sum()) > 0,
+    "docs/getting-started.md": lambda ns: (
+        int(ns["contact"].active.sum()) > 0
+        and ns["gaps"].shape == (10, ns["x"].shape[0])
+        and bool((ns["gaps"] < 0).any())  # the loop reached the tool
+    ),
     "docs/guides/search.md": lambda ns: (
         int(ns["own"].active.sum()) > 0
         and ns["grad"].shape == ns["scene"].x.shape
