@@ -4,7 +4,9 @@ For a change that must not slow anything (a refactor, a new layout), every
 form a user calls is timed on the reference scenes (``docs/scenes.md``,
 float32) for both trees, round-robin (``jaxcontact._timing.time_interleaved``:
 compiled ahead, two warm-up runs, then ``--repeats`` rounds, every call ended
-by ``block_until_ready``; median and 10th-90th percentile). The other
+by ``block_until_ready``; each round starts one call later than the last,
+so that no call always follows the same other one; median and 10th-90th
+percentile). The other
 revision is extracted with ``git archive`` and imported as
 ``jaxcontact_against``. Both trees run in the same process on the same
 inputs, so load on a shared machine falls on both alike: read the ratio
@@ -156,7 +158,7 @@ def run_scene(name: str, then, repeats: int) -> list[tuple]:
         calls[(form, "this tree")] = new[form]
         calls[(form, "against")] = old[form]
         calls[(form, "again")] = again[form]
-    timings = time_interleaved(calls, repeats=repeats)
+    timings = time_interleaved(calls, repeats=repeats, rotate=True)
     rows = []
     num_rows = scene.x.shape[0]
     for form in new:

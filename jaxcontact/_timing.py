@@ -70,7 +70,9 @@ def compiled_call(fn, args):
     return fn, _elapsed(fn, args)
 
 
-def time_interleaved(calls: dict, *, repeats: int = 20, warmup: int = 2) -> dict:
+def time_interleaved(
+    calls: dict, *, repeats: int = 20, warmup: int = 2, rotate: bool = False
+) -> dict:
     """Times several calls round-robin: A, B, C, A, B, C, ... rather than all A first.
 
     Load that comes and goes on a shared machine then falls on every method
@@ -81,6 +83,10 @@ def time_interleaved(calls: dict, *, repeats: int = 20, warmup: int = 2) -> dict
       calls: name -> ``(fn, args)``, ``args`` a tuple of positional arguments.
       repeats: timed runs of each, at least 1.
       warmup: untimed runs of each before the first timed round.
+      rotate: start each round one call later (A, B, C; B, C, A; ...): a
+        call that runs slower right after some other call (its caches
+        evicted) then pays that in every position alike, not always in
+        its own.
 
     Returns:
       name -> ``Timing``, in the order of ``calls``.
@@ -100,8 +106,11 @@ def time_interleaved(calls: dict, *, repeats: int = 20, warmup: int = 2) -> dict
         for _ in range(warmup):
             _elapsed(call, args)
     runs = {name: [] for name in prepared}
-    for _ in range(repeats):
-        for name, (call, _, args) in prepared.items():
+    names = list(prepared)
+    for round_ in range(repeats):
+        start = round_ % len(names) if rotate else 0
+        for name in names[start:] + names[:start]:
+            call, _, args = prepared[name]
             runs[name].append(_elapsed(call, args))
     timings = {}
     for name, (_, compile_s, _) in prepared.items():
