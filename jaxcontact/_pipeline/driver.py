@@ -230,9 +230,9 @@ def sized(
             return (nothing, jnp.zeros((), jnp.int32)) if with_needed else nothing
         return writeback.empty(query.result, num_rows, dtype, no_overflow)
     if candidates is None:
-        reach = query.inflate(points, radius, mask)
+        margin = query.inflate(points, radius, mask)
         culled, blocks = broad_phase(
-            low, high, cull_ok, segments, reach, sizes.block_size, sizes.block_capacity
+            low, high, cull_ok, segments, margin, sizes.block_size, sizes.block_capacity
         )
         listed, overflow = None, blocks.overflow
     else:
