@@ -9,8 +9,9 @@ A closest step compiles in 2-10 s (``benchmarks/targets.py``), against the
    beside), each compiled ``REPEATS`` times from a fresh lowering with JAX's
    caches cleared; the median of (eight - one) / 7 is what one more kernel of
    that kind adds. N = 10^4 float32 rows unless the row says otherwise.
-2. **The search programs by kind.** ``benchmarks/compile_probe.py``'s programs
-   (the cutting scene at 10^4 nodes, float64), each compiled
+2. **The search programs by kind.** The search programs of the archived
+   ``benchmarks/archive/compile_probe.py`` (``programs`` below: the cutting
+   scene at 10^4 nodes, float64), each compiled
    ``PROGRAM_REPEATS`` times, their kernels (``stages.kernel_lines``) sorted into the same
    kinds, and the sum of count x marginal cost beside the measured compile:
    an estimate that takes the kinds to add up, as part 1 shows they do
@@ -40,7 +41,9 @@ import numpy as np
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
 from stages import kernel_lines  # noqa: E402
 
+import jaxcontact  # noqa: E402
 from benchmarks.harness import _run  # noqa: E402
+from jaxcontact.scenes import cutting_scene  # noqa: E402
 
 REPEATS = 5
 PROGRAM_REPEATS = 3  # part 2's programs take 2-8 s each
@@ -139,6 +142,30 @@ def kind_of(line: str, bodies: dict[str, list[str]]) -> str:
     return "elementwise"
 
 
+def programs():
+    """name -> (jitted, args): the search programs on the cutting scene at 10^4
+    nodes (float64: x64 on, as ``main`` sets it), as the archived
+    ``benchmarks/archive/compile_probe.py`` compiled them."""
+    scene = cutting_scene(10_000, 18.0, x_tip_prev=18.2)
+    found = {}
+    for method in ("binned", "dense"):
+        for compact in (False, True):
+            for skin in (0.0, 0.05):
+                search = jaxcontact.Search(radius=0.1, skin=skin, method=method, compact=compact)
+                state = search.allocate(scene.x, scene.surface, x_prev=scene.x_prev)
+                name = f"closest-{method}-{'compact' if compact else 'dense'}-skin{skin}"
+                found[name] = (jax.jit(search.closest), (state, scene.x, scene.surface))
+    search = jaxcontact.Search(radius=0.1, method="binned")
+    state = search.allocate(scene.x, scene.surface, x_prev=scene.x_prev)
+    found["swept-binned"] = (jax.jit(search.swept), (state, scene.x_prev, scene.x, scene.surface))
+    found["all_to_all"] = (
+        jax.jit(lambda x, surface: jaxcontact.all_to_all(x, surface, radius=0.1)),
+        (scene.x, scene.surface),
+    )
+    found["swept"] = (jax.jit(jaxcontact.swept), (scene.x_prev, scene.x, scene.surface))
+    return found
+
+
 def by_kind(cost: dict[str, float]) -> list[str]:
     # A reduce-window stage is costed as a cumsum (itself a reduce-window on
     # XLA's CPU backend): a tree reduction's stage costs less, as part 1's
@@ -152,8 +179,6 @@ def by_kind(cost: dict[str, float]) -> list[str]:
         + " | estimate (s) | measured - estimate (s) |",
         "|---|---:|---:|" + "---:|" * (len(names) + 2),
     ]
-    from compile_probe import programs  # float64 scenes: x64 on (main)
-
     for name, (jitted, args) in programs().items():
         seconds, text = _compile_seconds(jitted, args, PROGRAM_REPEATS)
         found, bodies = kernel_lines(text)
@@ -179,7 +204,7 @@ def main() -> None:
     lines, cost = marginal_costs()
     print("Marginal compile time of one kernel, by kind (float32):\n")
     print("\n".join(lines))
-    print("\nThe search programs' kernels by kind (compile_probe.py's scene, float64):\n")
+    print("\nThe search programs' kernels by kind (the cutting scene at 10^4 nodes, float64):\n")
     print("\n".join(by_kind(cost)))
 
 

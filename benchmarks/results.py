@@ -41,7 +41,8 @@ class Section(NamedTuple):
     fence: bool = False  # stdout that is not markdown: shown as a code block
 
 
-# One line per section; a new benchmark script is one more line here.
+# One line per section; a new benchmark script is one more line here. The one-off
+# experiments in benchmarks/archive/ are not sections (their README lists them).
 SECTIONS = {
     "dense": Section("Dense detectors", "dense.py"),
     "bucket": Section("Bucket sort", "bucket.py", fence=True),
@@ -65,10 +66,6 @@ SECTIONS = {
     ),
     "stability": Section("Stability", "stability.py", ("--out", "{out}")),
     "simulate": Section("Simulation", "simulate.py"),
-    "row_counts": Section("Run time against the exact row count", "row_counts.py"),
-    "emitters": Section("XLA's CPU code generators", "emitters.py"),
-    "threads": Section("XLA's threads inside one program", "threads.py"),
-    "malloc": Section("glibc's allocator: fresh pages against reused ones", "malloc.py"),
     "size_scaling": Section(
         "Size scaling: time, memory and compile time against N and M",
         "size_scaling.py",
@@ -76,8 +73,6 @@ SECTIONS = {
         "{out}/size_scaling.md",
     ),
     "stages": Section("Where the bucket sort's time goes", "stages.py"),
-    "counting_sort": Section("Counting sorts against the sort (issue 25)", "counting_sort.py"),
-    "sorts": Section("Sorts whose keys outgrow int32 (issue 25)", "sorts.py"),
     "compile_ops": Section("What a compile costs, kernel by kernel (issue 25)", "compile_ops.py"),
     "targets": Section(
         "Issue 25's targets: Search.closest against the numba grid",
@@ -88,12 +83,6 @@ SECTIONS = {
     "one_call": Section(
         "A plain call against the jitted step, small scenes (issue 25, target 2)", "one_call.py"
     ),
-    "long_process": Section(
-        "Long processes: memory maps",
-        "long_process.py",
-        ("--out", "{out}"),
-        "{out}/long_process.md",
-    ),
     "bodies": Section("Bodies, self-contact and a radius per slave", "bodies.py"),
     "friction": Section("Slip tracking, friction and smooth normals", "friction.py"),
     "cutting": Section(
@@ -101,12 +90,6 @@ SECTIONS = {
         "cutting.py",
         ("--out", "{out}"),
         "{out}/cutting.md",
-    ),
-    "chip_curl": Section(
-        "Chip curl: a chip breaker, and how far the default mesh holds",
-        "chip_curl.py",
-        ("--fine", "--out", "{out}"),
-        "{out}/chip_curl.md",
     ),
 }
 VERSIONED = (

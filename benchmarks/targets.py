@@ -23,7 +23,7 @@ Before anything runs, glibc's allocator is set to keep freed pages
 (``_run.reuse_pages``): with its start values each call's large buffers are
 mapped afresh, at up to 4x the call's time for the dense form at 10^6 nodes
 and 5x for the numba grid on the chip's outline at 10^5, depending on what
-ran before in the process (``benchmarks/malloc.py``). Runs before 0.7.4
+ran before in the process (``benchmarks/archive/malloc.py``). Runs before 0.7.4
 did not set it.
 
 The ratio column is the numba grid's (one thread) median over each form's:
@@ -87,7 +87,7 @@ QUICK = (
     ("rough die", 10_000, 1_000),
     ("chip outline, self-contact", 10_000, None),
 )
-# FULL without the rough die at 10^6 x 10^5: benchmarks/threads.py's and malloc.py's scenes.
+# FULL without the rough die at 10^6 x 10^5: benchmarks/archive/threads.py's and malloc.py's scenes.
 WITHOUT_LARGEST_DIE = tuple(s for s in FULL if not (s[0] == "rough die" and s[1] > 10**5))
 NUMBA = "numba grid (1 thread)"
 NUMBA2 = "numba grid (2 threads)"
@@ -257,7 +257,7 @@ def main() -> None:
     threads = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else 1
     scenes = QUICK if args.quick else FULL
     # Both jaxcontact and the numba grid at their best: buffers on reused pages
-    # (benchmarks/malloc.py), whatever ran before in this process.
+    # (benchmarks/archive/malloc.py), whatever ran before in this process.
     _run.reuse_pages()
     command = "python benchmarks/targets.py" + (" --quick" if args.quick else "")
     header = (

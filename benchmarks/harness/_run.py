@@ -295,7 +295,7 @@ def reuse_pages() -> None:
     and glibc moves the threshold itself as large blocks are freed: a call's
     time then depends on what ran before it in the process (the numba grid on
     the chip's outline at 10^4 nodes: 4.4-4.7 ms in a new process, 1.0 ms
-    after a scene of 10^6 nodes). ``benchmarks/malloc.py`` measures both
+    after a scene of 10^6 nodes). ``benchmarks/archive/malloc.py`` measures both
     settings; every program ran as fast or faster with pages reused, so the
     comparisons of peers set it for all of them.
     """
@@ -408,7 +408,7 @@ def main(run, description, argv=None, *, slow: bool = False) -> int:
     if slow:
         parser.add_argument("--slow", type=float, default=None, help="s: time slower ones once")
     args = parser.parse_args(argv)
-    reuse_pages()  # every peer at its best (benchmarks/malloc.py)
+    reuse_pages()  # every peer at its best (benchmarks/archive/malloc.py)
     jax.config.update("jax_enable_x64", True)  # float64 scenes and variants beside float32
     options = {"slow_s": args.slow} if slow else {}
     print(run(args.quick, args.out, args.repeats, **options))

@@ -6,7 +6,7 @@ program has 40-200 kernels: 150-600 maps per program, freed only by
 ``jax.clear_caches()``. A process that calls a detector at hundreds of
 shapes (a sweep over mesh sizes, a notebook, a test suite) reaches the
 kernel's ``vm.max_map_count`` (65,530 by default) and XLA's compiler
-crashes (measured with the repository's benchmarks/long_process.py).
+crashes (measured with the repository's benchmarks/archive/long_process.py).
 
 So the one-call detectors, called plainly on concrete arrays, pad the
 slaves, the segments and the master nodes up to a size class (``size_class``:

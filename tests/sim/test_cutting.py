@@ -63,7 +63,7 @@ def test_a_chip_forms_and_rises_along_the_rake_face(coarse_run):
 def test_the_chip_root_on_the_machined_surface_is_no_landing(coarse_run):
     # The chip's underside meets the machined surface at the crack tip: own
     # contacts there, never counted as the chip landing, which it does not
-    # do in a quarter millimetre (benchmarks/chip_curl.py: at about 3 mm,
+    # do in a quarter millimetre (benchmarks/archive/chip_curl.py: at about 3 mm,
     # with a chip breaker).
     cut, model, state, record, frames, seconds = coarse_run
     assert int(record.own_contacts.max()) > 0

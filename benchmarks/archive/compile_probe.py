@@ -31,7 +31,7 @@ jax.config.update("jax_enable_x64", True)
 import jaxcontact  # noqa: E402
 from jaxcontact.scenes import cutting_scene  # noqa: E402
 
-sys.path.insert(0, str(pathlib.Path(__file__).parent))
+sys.path.insert(0, str(pathlib.Path(__file__).parents[1]))  # benchmarks/: stages.py
 from stages import kernels  # noqa: E402
 
 

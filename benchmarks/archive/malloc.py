@@ -40,7 +40,7 @@ import argparse
 import pathlib
 import sys
 
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))  # the repo root: benchmarks.*
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[2]))  # the repo root: benchmarks.*
 
 import jax
 import numpy as np
@@ -48,7 +48,7 @@ import numpy as np
 from benchmarks.harness import _run
 from benchmarks.harness.timing import _elapsed
 
-sys.path.insert(0, str(pathlib.Path(__file__).parent))
+sys.path.insert(0, str(pathlib.Path(__file__).parents[1]))  # benchmarks/: targets.py
 from targets import QUICK, WITHOUT_LARGEST_DIE, build, numba_closest, whole_search_steps  # noqa: E402
 from threads import same  # noqa: E402
 

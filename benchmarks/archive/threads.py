@@ -34,7 +34,7 @@ import argparse
 import pathlib
 import sys
 
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))  # the repo root: benchmarks.*
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[2]))  # the repo root: benchmarks.*
 
 import jax
 import numpy as np
@@ -42,7 +42,7 @@ import numpy as np
 from benchmarks.harness import _run
 from benchmarks.harness.timing import time_interleaved
 
-sys.path.insert(0, str(pathlib.Path(__file__).parent))
+sys.path.insert(0, str(pathlib.Path(__file__).parents[1]))  # benchmarks/: targets.py
 from targets import QUICK, WITHOUT_LARGEST_DIE, build, numba_closest, whole_search_steps  # noqa: E402
 
 ONE_THREAD = {"xla_disable_hlo_passes": "cpu-parallel-task-assigner"}

@@ -37,9 +37,11 @@ import time
 import warnings
 
 import numpy as np
-from cutting import markdown_table  # benchmarks/cutting.py, beside this script
 
-from jaxcontact.sim import cutting, cutting_demo
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))  # benchmarks/
+from cutting import markdown_table  # noqa: E402  benchmarks/cutting.py
+
+from jaxcontact.sim import cutting, cutting_demo  # noqa: E402
 
 RESULTS = pathlib.Path(__file__).parent / "results"
 CURL = cutting_demo.CURL
