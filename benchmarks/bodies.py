@@ -8,10 +8,10 @@ every call ended by ``block_until_ready``:
 
 1. **Self-contact** of the curling chip (``scenes.curling_chip``: one closed
    outline whose every node is a slave, radius ``2 h``) at 10^4 and 10^5
-   nodes: ``Search(self_contact=True).closest`` (the dense ``Contact`` and the
+   nodes: ``Search.closest`` with ``Pairs(self_contact=True)`` (the dense ``Contact`` and the
    compact ``ContactList``) beside the plain ``Search.closest`` on the same
    nodes and radius without the pair rule (every node then finds its own
-   segments). References: ``all_to_all(..., self_contact=True)`` (and the
+   segments). References: ``all_to_all(..., pairs=Pairs(..., self_contact=True))`` (and the
    plain ``all_to_all``, the rule's cost there) where N * M <= 2e8 pairs,
    and the same in float64 on a random sample of 2,000 slaves
    (``sampled_reference``), its time per slave extrapolated to N. Checked:
@@ -53,7 +53,7 @@ import numpy as np
 
 from benchmarks.harness._run import machine
 from benchmarks.harness.timing import time_interleaved
-from jaxcontact import Contact, Search, Surface, all_to_all
+from jaxcontact import Contact, Pairs, Search, Surface, all_to_all
 from jaxcontact.scenes import curling_chip, cutting_scene, two_blocks
 
 DENSE_PAIRS = 2e8  # all_to_all runs at or below this many pairs
@@ -64,9 +64,10 @@ GAP_TOLERANCE = 1e-5
 
 
 def sampled_reference(x, surface, rows, radius, *, slave_node):
-    """Slaves ``rows`` searched by ``all_to_all(..., slave_node=, self_contact=True)`` in
-    float64 (the library's pair rule, checked against the exact oracle by the tests), on
-    those rows alone: ``(segment, found, gap, distance)``, ``distance`` inf where not found.
+    """Slaves ``rows`` searched in float64 by ``all_to_all`` with
+    ``pairs=Pairs(slave_node, self_contact=True)`` (the library's pair rule,
+    checked against the exact oracle by the tests), on those rows alone:
+    ``(segment, found, gap, distance)``, ``distance`` inf where not found.
     """
     rows = np.asarray(rows)
     radius = np.broadcast_to(np.asarray(radius, np.float64), (len(x),))
@@ -76,8 +77,7 @@ def sampled_reference(x, surface, rows, radius, *, slave_node):
             jnp.asarray(np.asarray(x)[rows], jnp.float64),
             surface._replace(nodes=nodes),
             radius=radius[rows],
-            slave_node=np.asarray(slave_node)[rows],
-            self_contact=True,
+            pairs=Pairs(np.asarray(slave_node)[rows], self_contact=True),
         )
         found = np.asarray(contact.found)
         offset = np.asarray(x, np.float64)[rows] - np.asarray(contact.point)
@@ -159,25 +159,25 @@ def self_contact_part(num_nodes: int, sample: int, repeats: int, warmup: int, rn
     title = f"curling chip, {n:,} nodes, r = {radius:.3g}"
     allocated, sizes = {}, {}
 
-    def allocate(search, **pairing):
+    def allocate(search, pairs=None):
         start = time.perf_counter()
-        state = search.allocate(x, surface, **pairing)
+        state = search.allocate(x, surface, pairs=pairs)
         allocated[search] = time.perf_counter() - start
         sizes[search] = state.sizes
         return state
 
     searches = {
-        "Search(self_contact=True).closest": Search(radius=radius, self_contact=True),
-        "Search(self_contact=True, compact=True).closest": Search(
-            radius=radius, self_contact=True, compact=True
+        "Search.closest, Pairs(self_contact=True)": Search(radius=radius),
+        "Search(compact=True).closest, Pairs(self_contact=True)": Search(
+            radius=radius, compact=True
         ),
     }
     calls = {}
     for name, search in searches.items():
-        state = allocate(search, slave_node=node)
+        state = allocate(search, Pairs(node, self_contact=True))
 
         def step(state, x, surface, node, search=search):
-            return search.closest(state, x, surface, slave_node=node)
+            return search.closest(state, x, surface, pairs=Pairs(node, self_contact=True))
 
         calls[name] = (jax.jit(step), (state, x, surface, node))
     plain = Search(radius=radius)
@@ -189,9 +189,10 @@ def self_contact_part(num_nodes: int, sample: int, repeats: int, warmup: int, rn
     if dense_reference:
 
         def exhaustive(x, surface, node):
-            return all_to_all(x, surface, radius=radius, slave_node=node, self_contact=True)
+            rule = Pairs(node, self_contact=True)
+            return all_to_all(x, surface, radius=radius, pairs=rule)
 
-        calls["all_to_all(self_contact=True)"] = (jax.jit(exhaustive), (x, surface, node))
+        calls["all_to_all, Pairs(self_contact=True)"] = (jax.jit(exhaustive), (x, surface, node))
         calls["all_to_all (no pair rule)"] = (
             jax.jit(lambda x, surface: all_to_all(x, surface, radius=radius)),
             (x, surface),
@@ -337,10 +338,10 @@ def bodies_part(n: int, repeats: int, warmup: int, notes):
     count, m = x.shape[0], surface.segments.shape[0]
     title = f"two blocks, {count:,} nodes, r = {radius:.3g}"
     search = Search(radius=radius)
-    union_state = search.allocate(x, surface, slave_body=scene.slave_body)
+    union_state = search.allocate(x, surface, pairs=Pairs(slave_body=scene.slave_body))
 
     def one_call(state, x, surface, slave_body):
-        return search.closest(state, x, surface, slave_body=slave_body)
+        return search.closest(state, x, surface, pairs=Pairs(slave_body=slave_body))
 
     (first, segments0, ids0), (second, segments1, ids1) = split(scene)
     segments0, segments1 = jnp.asarray(segments0), jnp.asarray(segments1)
@@ -356,7 +357,7 @@ def bodies_part(n: int, repeats: int, warmup: int, notes):
         return (c0, c1), (s0, s1)
 
     def exhaustive(x, surface, slave_body):
-        return all_to_all(x, surface, radius=radius, slave_body=slave_body)
+        return all_to_all(x, surface, radius=radius, pairs=Pairs(slave_body=slave_body))
 
     calls = {
         "one Search.closest over the union (slave_body)": (

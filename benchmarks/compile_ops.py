@@ -148,7 +148,7 @@ def programs():
     ``benchmarks/archive/compile_probe.py`` compiled them."""
     scene = cutting_scene(10_000, 18.0, x_tip_prev=18.2)
     found = {}
-    for method in ("binned", "dense"):
+    for method in ("binned", "unbinned"):
         for compact in (False, True):
             for skin in (0.0, 0.05):
                 search = jaxcontact.Search(radius=0.1, skin=skin, method=method, compact=compact)

@@ -28,7 +28,7 @@ radius 0.1, as ``benchmarks/bodies.py`` part 3) at 10^4 and 81,939 nodes,
 the frames the grid and the grid moved by ``+0.01`` in x (the cutting
 direction: the nodes slide along the tool's flank and into its rake face);
 and the curling chip (``scenes.curling_chip(10_000)``, every node a slave,
-``Search(self_contact=True)`` with ``slave_node``, radius ``2 h``), the
+``Pairs(slave_node, self_contact=True)``, radius ``2 h``), the
 frames the chip and the chip moved by ``0.75 h`` in x (its nodes off the
 workpiece's rectangle move, the master moving with them: the chip's tip
 slides along the machined surface). The states are allocated for both frames
@@ -80,7 +80,7 @@ import numpy as np
 from benchmarks.harness._run import machine
 from benchmarks.harness.internals import _inputs, _normals, _outline, _track
 from benchmarks.harness.timing import time_interleaved
-from jaxcontact import Contact, ContactList, Search
+from jaxcontact import Contact, ContactList, Pairs, Search
 from jaxcontact.forces import Friction, coulomb, penalty
 from jaxcontact.scenes import curling_chip, cutting_scene
 
@@ -304,16 +304,15 @@ def scene_part(title, frames, radius, compact, pairing, repeats, warmup, contact
     """Times the five variants of one scene round-robin; returns the rows and the parts' inputs."""
     (x0, surface0), (x1, surface1) = frames
     num_rows = x0.shape[0]
-    self_contact = "slave_node" in pairing
     # One allocation for both frames; each variant starts its own state with those sizes.
     start = time.perf_counter()
-    sizing = Search(radius=radius, compact=compact, self_contact=self_contact)
+    sizing = Search(radius=radius, compact=compact)
     allocated = sizing.allocate(x0, surface0, **pairing)
     sizes = sizing.allocate(x1, surface1, at_least=allocated, **pairing).sizes
     allocate_s = time.perf_counter() - start
     calls, compiles, steps, fresh = {}, {}, {}, {}
     for name, (keywords, forces) in VARIANTS.items():
-        search = Search(radius=radius, compact=compact, self_contact=self_contact, **keywords)
+        search = Search(radius=radius, compact=compact, **keywords)
         state = search.init(x0, surface0, sizes=sizes)
         carry = (state, Friction.zeros(num_rows, x0.dtype)) if forces == "coulomb" else state
         step = jax.jit(make_step(search, forces, num_rows))
@@ -449,7 +448,7 @@ def chip_frames(num_nodes: int):
         f"curling chip, {x0.shape[0]:,} nodes, r = {scene.radius:.3g}, self-contact "
         f"({int(chip.sum()):,} chip nodes moved {CHIP_SHIFT:g} h)"
     )
-    return title, tuple(frames), scene.radius, {"slave_node": scene.slave_node}
+    return title, tuple(frames), scene.radius, {"pairs": Pairs(scene.slave_node, self_contact=True)}
 
 
 def table(rows) -> list[str]:

@@ -41,7 +41,7 @@ segment at a vertex for 1 slave, the two gaps equal to
 fused loops). The numba grid's answer equals it on ``found`` and
 ``segment`` but for exact vertex ties (its rule is the lower index). On the
 self-contact scene (``scenes.curling_chip``: every node of the chip's
-outline is a slave, ``Search(self_contact=True)``) the numba grid has no
+outline is a slave, ``Pairs(slave_node, self_contact=True)``) the numba grid has no
 pair rule: it answers the plain query over the same nodes and segments,
 where every node finds its own segments, so its time is a lower bound for a
 grid that applied the rule, and its answer is not compared.
@@ -65,7 +65,7 @@ import numpy as np
 
 from benchmarks.harness import _run
 from benchmarks.harness.timing import time_interleaved
-from jaxcontact import Search
+from jaxcontact import Pairs, Search
 from jaxcontact.scenes import curling_chip, cutting_scene, rough_die_scene
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
@@ -97,7 +97,7 @@ def build(kind: str, size: int, parameter):
     """``(x, surface, radius, pair)``: the scene, and the pair rule's keywords (or {})."""
     if kind.startswith("chip"):
         scene = curling_chip(size)
-        pair = {"slave_node": scene.slave_node}
+        pair = {"pairs": Pairs(scene.slave_node, self_contact=True)}
         return scene.x, scene.surface, scene.radius, pair
     scene = (
         rough_die_scene(size, parameter) if kind == "rough die" else cutting_scene(size, parameter)
@@ -121,7 +121,7 @@ def whole_search_steps(x, surface, radius, pair) -> dict:
     in both result forms (``step``)."""
     return {
         "compact" if compact else "dense": step(
-            Search(radius=radius, compact=compact, self_contact=bool(pair)), x, surface, pair
+            Search(radius=radius, compact=compact), x, surface, pair
         )
         for compact in (False, True)
     }
@@ -159,11 +159,10 @@ def _search_check(rows, reference) -> str:
 
 def run_scene(kind: str, size: int, parameter, repeats: int, threads: int) -> list[dict]:
     x, surface, radius, pair = build(kind, size, parameter)
-    self_contact = bool(pair)
     calls = {}
     for skin, how in ((0.0, "whole search"), (radius / 2, "candidates reused")):
         for compact in (False, True):
-            search = Search(radius=radius, skin=skin, compact=compact, self_contact=self_contact)
+            search = Search(radius=radius, skin=skin, compact=compact)
             form = "compact" if compact else "dense"
             calls[f"Search.closest, {how}, {form}"] = step(search, x, surface, pair)
     for name, count in ((NUMBA, 1), (NUMBA2, 2)):
@@ -184,7 +183,7 @@ def run_scene(kind: str, size: int, parameter, repeats: int, threads: int) -> li
             if reference is None:
                 reference = rows
             checks[name] = _search_check(rows, reference)
-        elif self_contact:
+        elif pair:
             checks[name] = "plain query (no pair rule)"
         else:
             checks[name] = _numba_check(fn(*args), reference)
