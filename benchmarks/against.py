@@ -33,13 +33,9 @@ says on a noisy machine.
 from __future__ import annotations
 
 import argparse
-import glob
-import os
 import pathlib
 import re
-import subprocess
 import sys
-import tempfile
 
 import jax
 import numpy as np
@@ -48,6 +44,7 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent))
 
 import jaxcontact  # noqa: E402
 from benchmarks.harness._run import machine  # noqa: E402
+from benchmarks.harness.revision import extracted  # noqa: E402
 from jaxcontact._timing import time_interleaved  # noqa: E402
 from jaxcontact.scenes import cutting_scene, rough_die_scene  # noqa: E402
 
@@ -60,25 +57,6 @@ SCENES = {
 QUICK = ("cutting 10^4", "rough die 10^4 x 10^3")
 # The exhaustive forms are timed where they take under a second or so.
 EXHAUSTIVE_PAIRS = 10**8
-
-
-def extracted(revision: str):
-    """The package at git ``revision``, imported as ``jaxcontact_against``."""
-    folder = tempfile.mkdtemp(prefix="jaxcontact-against-")
-    archive = subprocess.run(
-        ["git", "archive", revision, "jaxcontact"], check=True, capture_output=True
-    ).stdout
-    subprocess.run(["tar", "-x", "-C", folder], input=archive, check=True)
-    os.rename(os.path.join(folder, "jaxcontact"), os.path.join(folder, "jaxcontact_against"))
-    for path in glob.glob(os.path.join(folder, "jaxcontact_against", "**", "*.py"), recursive=True):
-        with open(path) as stream:
-            text = re.sub(r"\bjaxcontact\b", "jaxcontact_against", stream.read())
-        with open(path, "w") as stream:
-            stream.write(text)
-    sys.path.insert(0, folder)
-    import jaxcontact_against
-
-    return jaxcontact_against
 
 
 def forms(package, scene) -> dict:

@@ -47,9 +47,7 @@ import json
 import os
 import pathlib
 import re
-import subprocess
 import sys
-import tempfile
 from collections import Counter
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))  # the repo root: benchmarks.*
@@ -75,6 +73,7 @@ from benchmarks.harness.internals import (
     vmapped,
     write_blocks,
 )
+from benchmarks.harness.revision import extracted
 from benchmarks.harness.timing import time_interleaved
 from benchmarks.peers import build
 
@@ -337,27 +336,14 @@ def profile(jitted, args, out: str, repeats: int = 5) -> list[str]:
     return lines
 
 
-@functools.cache
 def against(revision: str):
     """``(package, sized_contact)`` of the bucket sort at git ``revision``, imported
-    as ``jaxcontact_against`` from an extracted copy."""
-    folder = tempfile.mkdtemp(prefix="jaxcontact-against-")
-    archive = subprocess.run(
-        ["git", "archive", revision, "jaxcontact"], check=True, capture_output=True
-    ).stdout
-    subprocess.run(["tar", "-x", "-C", folder], input=archive, check=True)
-    os.rename(os.path.join(folder, "jaxcontact"), os.path.join(folder, "jaxcontact_against"))
-    for path in glob.glob(os.path.join(folder, "jaxcontact_against", "**", "*.py"), recursive=True):
-        with open(path) as stream:
-            text = re.sub(r"\bjaxcontact\b", "jaxcontact_against", stream.read())
-        with open(path, "w") as stream:
-            stream.write(text)
-    sys.path.insert(0, folder)
-    import jaxcontact_against
+    as ``jaxcontact_against`` from an extracted copy (``harness.revision``)."""
+    package = extracted(revision)
     from jaxcontact_against._sizes import measure as measure_then
     from jaxcontact_against.bench._run import sized_contact
 
-    return jaxcontact_against, functools.partial(_sized_then, measure_then, sized_contact)
+    return package, functools.partial(_sized_then, measure_then, sized_contact)
 
 
 def _sized_then(measure_then, sized_contact, scene, surface):

@@ -28,33 +28,10 @@ import numpy as np
 
 jax.config.update("jax_enable_x64", True)
 
-import jaxcontact  # noqa: E402
-from jaxcontact.scenes import cutting_scene  # noqa: E402
 
-sys.path.insert(0, str(pathlib.Path(__file__).parents[1]))  # benchmarks/: stages.py
+sys.path.insert(0, str(pathlib.Path(__file__).parents[1]))  # benchmarks/: stages.py, compile_ops.py
+from compile_ops import programs  # noqa: E402
 from stages import kernels  # noqa: E402
-
-
-def programs():
-    """name -> (jitted, args)."""
-    scene = cutting_scene(10_000, 18.0, x_tip_prev=18.2)
-    found = {}
-    for method in ("binned", "dense"):
-        for compact in (False, True):
-            for skin in (0.0, 0.05):
-                search = jaxcontact.Search(radius=0.1, skin=skin, method=method, compact=compact)
-                state = search.allocate(scene.x, scene.surface, x_prev=scene.x_prev)
-                name = f"closest-{method}-{'compact' if compact else 'dense'}-skin{skin}"
-                found[name] = (jax.jit(search.closest), (state, scene.x, scene.surface))
-    search = jaxcontact.Search(radius=0.1, method="binned")
-    state = search.allocate(scene.x, scene.surface, x_prev=scene.x_prev)
-    found["swept-binned"] = (jax.jit(search.swept), (state, scene.x_prev, scene.x, scene.surface))
-    found["all_to_all"] = (
-        jax.jit(lambda x, surface: jaxcontact.all_to_all(x, surface, radius=0.1)),
-        (scene.x, scene.surface),
-    )
-    found["swept"] = (jax.jit(jaxcontact.swept), (scene.x_prev, scene.x, scene.surface))
-    return found
 
 
 def main() -> None:
