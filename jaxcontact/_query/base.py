@@ -34,6 +34,7 @@ A query is a stateless singleton: hashable, passed to ``jit`` as static.
 
 from __future__ import annotations
 
+import abc
 from typing import ClassVar
 
 from jaxcontact._pipeline.broad import Box
@@ -41,7 +42,7 @@ from jaxcontact._pipeline.segments import Segments
 from jaxcontact._types import Array
 
 
-class Query:
+class Query(abc.ABC):
     """One kind of question: a pair kernel, a reach, a choice, an assembly, a result type."""
 
     name: ClassVar[str]  # "closest" or "swept": names programs and error messages
@@ -51,45 +52,45 @@ class Query:
     num_points: ClassVar[int]  # arrays of f[N, 2] per slave: 1 (a point) or 2 (a path)
     row_multiple: ClassVar[int] = 1  # the exhaustive search pads its rows to a multiple
 
+    @abc.abstractmethod
     def check(self, points: tuple, surface, radius, mask):
         """``(points, surface, radius, mask)`` checked, as arrays (``ValueError`` naming
         the argument otherwise)."""
-        raise NotImplementedError
 
+    @abc.abstractmethod
     def kernel(self, *row_and_edge) -> Array:
         """f[]: the score of one slave (its points) against one ``Edge``."""
-        raise NotImplementedError
 
+    @abc.abstractmethod
     def sanitize(self, points: tuple, mask) -> tuple[tuple, Array]:
         """``(points with bad rows zeroed, bool[N] real rows)``."""
-        raise NotImplementedError
 
+    @abc.abstractmethod
     def pair_reach(self, points: tuple, ok: Array, radius) -> Array:
         """f[] or f[N]: each slave's reach, the unit of the self-contact window."""
-        raise NotImplementedError
 
+    @abc.abstractmethod
     def row_boxes(self, points: tuple, mask) -> tuple[Array, Array, Array | None]:
         """``(low, high, ok)``: each slave's box (f[N, 2] each) and the rows the
         cull may keep (``None``: all but masked ones)."""
-        raise NotImplementedError
 
+    @abc.abstractmethod
     def inflate(self, points: tuple, radius, mask) -> Array:
         """f[]: the margin the master's segments are inflated by for the cull."""
-        raise NotImplementedError
 
+    @abc.abstractmethod
     def cell_boxes(self, segments: Segments, kept: tuple, ok: Array, culled: Box) -> Box:
         """The segment boxes binned into cells (``culled``: the cull's boxes)."""
-        raise NotImplementedError
 
+    @abc.abstractmethod
     def assemble(self, kept: tuple, segments: Segments, choice, radius, overflow, ok, ruling):
         """The ``result`` of slaves ``kept`` for their ``choice`` (i32[S], -1 for none).
 
         ``ruling`` is ``(rule, row tags)``: the pair rule the search applied."""
-        raise NotImplementedError
 
+    @abc.abstractmethod
     def reportable(self, choice: Array, score: Array, ok: Array, segments: Segments, radius):
         """bool[S]: the kept rows that may hold an answer once assembled."""
-        raise NotImplementedError
 
     def __repr__(self) -> str:
         return f"<query {self.name}>"
