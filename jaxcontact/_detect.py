@@ -1,6 +1,6 @@
 """The paper's detectors as one-call functions, over one prologue and one driver.
 
-Each is the same prologue (``_prepare``: check, pair rule, pad to a size
+Each is the same prologue (``_checked``, ``_padded``: check, pair rule, pad to a size
 class) and epilogue (``_finish``: normals, cut back) around one of the two
 drivers (``_pipeline.driver``), for one of the two queries (``_query``).
 
@@ -45,12 +45,17 @@ from jaxcontact._types import (
 )
 
 
-def _prepare(query, points: tuple, surface, radius, mask, pairs, keywords: dict):
-    """The prologue every one-call form shares: ``(points, surface, radius,
-    mask, pairs, num_rows)`` checked, the pair rule folded in, padded to a
-    size class (``num_rows`` None where nothing was padded)."""
+def _checked(query, points: tuple, surface, radius, mask, pairs, keywords: dict):
+    """The prologue's first half: ``(points, surface, radius, mask, pairs)``
+    checked, the replaced pair keywords folded in."""
     points, surface, radius, mask = query.check(points, surface, radius, mask)
     pairs = _pairs.check(pairs, points[-1], surface, mask, stacklevel=4, **keywords)
+    return points, surface, radius, mask, pairs
+
+
+def _padded(points: tuple, surface, radius, mask, pairs):
+    """The prologue's second half: ``(points, surface, radius, mask, pairs,
+    num_rows)`` padded to a size class (``num_rows`` None where nothing was)."""
     per_row = radius if radius is not None and np.ndim(radius) else None
     points, mask, surface, (per_row, pairs), num_rows = pad_scene(
         points, mask, surface, (per_row, pairs), others=radius
@@ -116,9 +121,8 @@ def all_to_all(
       ([0.25, -0.125], [False, True], [[0.0, 1.0], [0.0, 1.0]])
     """
     corner = check_normals(normals, corner)
-    points, surface, radius, mask, pairs, num_rows = _prepare(
-        CLOSEST, (x,), surface, radius, mask, pairs, replaced
-    )
+    checked = _checked(CLOSEST, (x,), surface, radius, mask, pairs, replaced)
+    points, surface, radius, mask, pairs, num_rows = _padded(*checked)
     contact = driver.exhaustive(CLOSEST, points, surface, radius, mask, pairs)
     return _finish(contact, points, surface, normals, corner, num_rows)
 
@@ -158,9 +162,8 @@ def swept(
       >>> crossing.crossed.tolist(), crossing.t.tolist(), crossing.point.tolist()
       ([True], [0.25], [[1.0, 1.0]])
     """
-    points, surface, _, mask, pairs, num_rows = _prepare(
-        SWEPT, (x_prev, x), surface, None, mask, pairs, replaced
-    )
+    checked = _checked(SWEPT, (x_prev, x), surface, None, mask, pairs, replaced)
+    points, surface, _, mask, pairs, num_rows = _padded(*checked)
     crossing = driver.exhaustive(SWEPT, points, surface, None, mask, pairs)
     return _finish(crossing, points, surface, "flat", 0.0, num_rows)
 
@@ -215,16 +218,16 @@ def bucket_sort(
       True
     """
     corner = check_normals(normals, corner)
-    points, surface, radius, mask, pairs, num_rows = _prepare(
-        CLOSEST, (x,), surface, radius, mask, pairs, replaced
-    )
+    checked = _checked(CLOSEST, (x,), surface, radius, mask, pairs, replaced)
+    use_cells = _use_cells(checked[1])
+    points, surface, radius, mask, pairs, num_rows = _padded(*checked)
     require_concrete("bucket_sort", (points, surface, radius, mask, pairs))
 
     def sizes_now(use_cells):
         reach = reach_of(radius, mask)
         return measure(points[0], surface, radius=reach, mask=mask, use_cells=use_cells)
 
-    found = _bucket(CLOSEST, points, surface, radius, mask, pairs, compact, sizes_now)
+    found = _bucket(CLOSEST, points, surface, radius, mask, pairs, compact, use_cells, sizes_now)
     return _finish(found, points, surface, normals, corner, num_rows)
 
 
@@ -259,16 +262,16 @@ def bucket_swept(
       A ``Crossing`` equal to ``swept``'s, ``overflow`` False, or its
       ``CrossingList``; sizes kept and measured again as ``bucket_sort``'s.
     """
-    points, surface, _, mask, pairs, num_rows = _prepare(
-        SWEPT, (x_prev, x), surface, None, mask, pairs, replaced
-    )
+    checked = _checked(SWEPT, (x_prev, x), surface, None, mask, pairs, replaced)
+    use_cells = _use_cells(checked[1])
+    points, surface, _, mask, pairs, num_rows = _padded(*checked)
     require_concrete("bucket_swept", (points, surface, mask, pairs))
 
     def sizes_now(use_cells):
         x_prev, x = points
         return measure(x, surface, x_prev=x_prev, mask=mask, use_cells=use_cells)
 
-    found = _bucket(SWEPT, points, surface, None, mask, pairs, compact, sizes_now)
+    found = _bucket(SWEPT, points, surface, None, mask, pairs, compact, use_cells, sizes_now)
     return _finish(found, points, surface, "flat", 0.0, num_rows)
 
 
@@ -287,9 +290,14 @@ def at_sizes(
     )
 
 
-def _bucket(query, points, surface, radius, mask, pairs, compact: bool, sizes_now):
+def _use_cells(surface: Surface) -> bool:
+    """Whether the one-call bucket forms bin in cells: on the caller's segment
+    count, before padding adds masked ones."""
+    return surface.segments.shape[0] > CELLS_ABOVE
+
+
+def _bucket(query, points, surface, radius, mask, pairs, compact: bool, use_cells, sizes_now):
     """``query``'s sized search at the kept sizes, or at new ones."""
-    use_cells = surface.segments.shape[0] > CELLS_ABOVE
 
     def search(sizes):
         sizes = room_for_every_slot(sizes) if compact else sizes
