@@ -22,7 +22,7 @@ import time
 import jax
 import numpy as np
 
-from benchmarks.harness import answers
+from benchmarks.harness import answers, report
 from benchmarks.harness.internals import _bucket
 from benchmarks.harness.timing import Timing, compiled_call, pinned_note, time_interleaved
 from benchmarks.peer_codes import numba_grid
@@ -400,7 +400,7 @@ def section(name, title, quick, note, body, pictures) -> str:
 
 
 def main(run, description, argv=None, *, slow: bool = False) -> int:
-    """The command line of one benchmark module: parses ``argv``, prints ``run``'s markdown."""
+    """The command line of an archived script (benchmarks/archive/): prints ``run``'s markdown."""
     parser = argparse.ArgumentParser(description=description)
     parser.add_argument("--quick", action="store_true", help="small sizes, a smoke test")
     parser.add_argument("--out", default="jaxcontact-bench", help="folder for CSV and PNG")
@@ -412,6 +412,41 @@ def main(run, description, argv=None, *, slow: bool = False) -> int:
     jax.config.update("jax_enable_x64", True)  # float64 scenes and variants beside float32
     options = {"slow_s": args.slow} if slow else {}
     print(run(args.quick, args.out, args.repeats, **options))
+    return 0
+
+
+def suite(name, run, draw, description, argv=None, *, options=()) -> int:
+    """The command line of a maintained suite ``benchmarks/<name>.py``.
+
+    ``run(args)`` measures and returns ``{"title", "tables", "data", "notes"}`` (tables from
+    ``report.table``); the record (with its provenance) goes to ``<--out>/<name>.json``, its
+    figure, ``draw(record, pyplot)``, to ``<--out>/<name>.png``, and its markdown to standard
+    output. ``options``: more ``(flags, keywords)`` for ``add_argument``.
+    """
+    parser = argparse.ArgumentParser(description=description)
+    parser.add_argument("--quick", action="store_true", help="small sizes, a smoke test")
+    parser.add_argument("--out", default="benchmarks/results", help="folder for JSON and PNG")
+    parser.add_argument("--repeats", type=int, default=None, help="timed runs per method")
+    for flags, keywords in options:
+        parser.add_argument(*flags, **keywords)
+    argv = sys.argv[1:] if argv is None else list(argv)
+    args = parser.parse_args(argv)
+    reuse_pages()  # every peer at its best (benchmarks/archive/malloc.py)
+    jax.config.update("jax_enable_x64", True)  # float64 scenes and variants beside float32
+    found = run(args)
+    rec = report.record(
+        name,
+        found["title"],
+        found["tables"],
+        data=found.get("data"),
+        notes=found.get("notes", ()),
+        argv=argv,
+        quick=args.quick,
+    )
+    rec["allocator"] = list(_allocator)
+    written = report.save(rec, args.out, draw)
+    print(report.markdown(rec, f"{name}.png" if len(written) > 1 else None))
+    print(f"wrote {', '.join(written)}", file=sys.stderr)
     return 0
 
 
