@@ -245,26 +245,6 @@ def _benchmark_module(name):
     return module
 
 
-def test_results_assembles_stored_sections(tmp_path):
-    results = _benchmark_module("results")
-    stored = tmp_path / "results"
-    stored.mkdir()
-    (stored / "peers.md").write_text("## Peers\n\ntable\n\n![peers.png](peers.png)\n")
-    (stored / "bucket.md").write_text("```\n# bucket.py: a comment line\n```\n")
-    notes = tmp_path / "notes.md"
-    notes.write_text("Hand-written headline.")
-    output = tmp_path / "RESULTS.md"
-    results.assemble(str(stored), str(output), str(notes))
-    text = output.read_text()
-    assert text.startswith("# Benchmark results\n\n- Machine:")
-    assert "Hand-written headline." in text
-    assert "#### Peers" in text and "![peers.png](results/peers.png)" in text
-    assert "\n# bucket.py: a comment line\n" in text  # code blocks are left as they are
-    assert "Not run yet: `python benchmarks/results.py --sections dense`" in text
-    if not (pathlib.Path(results.HERE) / "stability.py").exists():
-        assert "`benchmarks/stability.py` is not in this checkout." in text
-
-
 def test_size_scaling_rows_slopes_and_figure(tmp_path, monkeypatch):
     """One tiny rough die through the library's two programs (all_to_all over its pair
     budget), then a sweep made up from its rows: the slopes, tables, CSV and figure."""

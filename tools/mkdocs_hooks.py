@@ -6,6 +6,11 @@ site holds only ``docs/``: a link to a file it carries as a page of its own
 (``REPOSITORY_PAGES``) is pointed at that page; a link to another file that
 exists is written as its repository path in code, since the site cannot serve
 it. A link to nothing is left alone, for ``mkdocs build --strict`` to fail on.
+
+The benchmark figures are the exception: the performance page shows the PNGs the suites store
+beside their JSON in ``benchmarks/results/`` (``benchmarks/report.py`` links them there), so
+``on_files`` serves that folder's figures at the same path on the site, and an image link to
+one is pointed at it.
 """
 
 from __future__ import annotations
@@ -14,11 +19,22 @@ import os
 import pathlib
 import re
 
+from mkdocs.structure.files import File
+
 # Repository file -> the docs page that includes it.
 REPOSITORY_PAGES = {"CHANGELOG.md": "changelog.md"}
 
 # [text](target) and ![text](target); the target without spaces or a title.
 LINK = re.compile(r"(!?)\[([^\]]*)\]\(([^)\s]+)\)")
+FIGURES = "benchmarks/results"  # served on the site at this path
+
+
+def on_files(files, config):
+    root = pathlib.Path(config["docs_dir"]).resolve().parent
+    for png in sorted((root / FIGURES).rglob("*.png")):
+        path = png.relative_to(root).as_posix()
+        files.append(File(path, str(root), config["site_dir"], config["use_directory_urls"]))
+    return files
 
 
 def on_page_markdown(markdown: str, page, config, files) -> str:
@@ -35,6 +51,9 @@ def on_page_markdown(markdown: str, page, config, files) -> str:
         if resolved.is_relative_to(docs) or not resolved.exists():
             return match.group(0)
         name = resolved.relative_to(root).as_posix()
+        if bang and name.startswith(FIGURES + "/"):
+            served = os.path.relpath(docs / name, source)
+            return f"{bang}[{text}]({pathlib.Path(served).as_posix()})"
         if name in REPOSITORY_PAGES:
             page_path = os.path.relpath(docs / REPOSITORY_PAGES[name], source)
             suffix = f"#{anchor}" if anchor else ""

@@ -140,7 +140,7 @@ def cut_rows(result, num_rows: int | None):
     # On the CPU: host views, cut, and back as the arguments of a program that
     # returns them (copies only: no kernel is compiled, nothing is mapped).
     # A jitted argument costs microseconds; jax.device_put about 0.1 ms an
-    # array (measured with the repository's benchmarks/one_call.py).
+    # array (measured with the repository's benchmarks/archive/one_call.py).
     cut = jax.tree.map(
         lambda values: np.asarray(values)[:num_rows] if values.ndim else values, result
     )
