@@ -15,8 +15,12 @@ moved by ``(o, o)``, ``o`` from 1 to 10^6): against the float64 scene, and
 against the float64 answer for the rounded float32 inputs (the library's own
 arithmetic).
 
-Writes ``<out>/time_vs_error.json`` and ``<out>/time_vs_error.png`` (default ``--out
-benchmarks/results``) and prints the record's markdown.
+The figure: per scene, run time against wrong rows (missed + false + wrong
+segment) and against the largest gap error, each with its Pareto front; right,
+part 2's float32 gap error against the offset, against the float64 scene and
+against the rounded inputs, on one scale. Writes ``<out>/time_vs_error.json``
+and ``<out>/time_vs_error.png`` (default ``--out benchmarks/results``) and
+prints the record's markdown.
 
     python benchmarks/time_vs_error.py            # both scenes (the die's all_to_all: 8 s a call)
     python benchmarks/time_vs_error.py --quick    # the cutting scene at 5,000 nodes, fewer sizes
@@ -191,10 +195,11 @@ def run(args) -> dict:
     offsets = OFFSETS[::2] if quick else OFFSETS
     shifted = run_offsets(cutting_nodes, offsets, with_bucket=not quick)
     tradeoff_note = (
-        "Medians of interleaved runs. Each answer checked against all_to_all in float64 on the "
-        "float64 scene: missed and false contacts, wrong segments (farther than the closest), "
-        "ties (another segment at the same distance), the largest gap error. `overflow`: the "
-        "sizes were too small for the scene (contacts may be missed)."
+        'Medians of interleaved runs; "(sized)": the bucket sort at sizes measured outside '
+        "the timer, its whole search inside. Each answer checked against all_to_all in "
+        "float64 on the float64 scene: missed and false contacts, wrong segments (farther "
+        "than the closest), ties (another segment at the same distance), the largest gap "
+        "error. `overflow`: the sizes were too small for the scene (contacts may be missed)."
     )
     offset_note = (
         "The cutting scene moved by `(o, o)`, searched in float32. `max gap error` and the "
