@@ -1,52 +1,63 @@
-"""Stability study: how far jaxcontact's answers are from the exact ones, and where.
+"""Numerical stability: how far jaxcontact's answers are from the exact ones, and where.
 
 Every reference value comes from the exact rational oracle of the test suite
 (``tests/oracle.py``, ``fractions.Fraction``) evaluated on the very inputs the
 library sees (already rounded to float32 or float64), so an error here is the
-library's rounding alone. Four studies, each in float32 and float64:
+library's rounding alone. Four studies, each in float32 and float64, one panel
+of the figure each:
 
 1. gap error against the coordinates' offset from the origin (unit segment,
    slaves within 0.5 of it, the whole scene shifted by 0 .. 1e7);
 2. gap error against the segment length (1e-9 .. 1) for slaves about a unit
-   away, in absolute terms and in ulps of the local scale |x - a| + |b - a|;
+   away, in absolute terms and in units of eps times the local scale
+   |x - a| + |b - a|;
 3. crossing-time error against the angle between path and segment
-   (1e-8 .. pi/2 rad), against the conditioning bound eps / sin(angle);
+   (1e-8 .. 1 rad), against the conditioning bound eps / sin(angle);
 4. the rate of segment choices that differ from the oracle's near a tie
    (slaves at a relative distance delta from the bisector of a corner, or from
    the midline between two parallel faces), and how many of those are NOT
    explained by the float bound (the oracle's two distances differing by
    more than it): that count must be zero.
 
-Writes one CSV per study and one PNG per study into ``--out`` (default
-``benchmarks/out/stability/``) and prints markdown tables.
+Seeded and exact: the numbers are the same on any machine. Writes
+``<out>/stability.json`` and ``<out>/stability.png`` (default ``--out
+benchmarks/results``) and prints the record's markdown.
 
     python benchmarks/stability.py            # the full study (a few minutes)
     python benchmarks/stability.py --quick    # fewer samples, a smoke test
+    taskset -c 0 python benchmarks/stability.py --out benchmarks/results/pinned
 """
 
 from __future__ import annotations
 
-import argparse
-import csv
 import math
 import pathlib
 import sys
 
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))  # tests.oracle, benchmarks.*
+
 import jax
+import jax.numpy as jnp
 import numpy as np
 
-jax.config.update("jax_enable_x64", True)
-
-import jax.numpy as jnp  # noqa: E402
-
-import jaxcontact  # noqa: E402
-
-ROOT = pathlib.Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))  # the repo root: tests.oracle, benchmarks.*
-from tests import oracle  # noqa: E402
+import jaxcontact
+from benchmarks.harness import _run, report
+from tests import oracle
 
 DTYPES = {"float32": np.float32, "float64": np.float64}
-ULPS = 8  # the constant of the bounds the property tests assert (tests/test_properties.py)
+ULPS = 8  # the constant of the bounds the property tests assert (tests/core/test_properties.py)
+OFFSETS = (0.0, *(10.0**k for k in range(0, 8)))
+LENGTHS = tuple(10.0**k for k in range(-9, 1))
+ANGLES = tuple(min(10.0**k, np.pi / 2) for k in range(-8, 1))
+DELTAS = tuple(10.0**k for k in range(-16, -1, 2))
+
+# Table columns: the figure reads its points back from the record by these names.
+ERROR = "max gap error"
+IN_EPS = "max error / (eps scale)"
+T_ERROR = "max t error"
+T_IN_EPS = "max t error / (eps conditioning)"
+BOUND = "eps / sin(angle)"
+RATE = "wrong choice rate"
 
 contact = jax.jit(lambda x, s: jaxcontact.all_to_all(x, s, radius=1e30))
 crossing = jax.jit(jaxcontact.swept)
@@ -56,6 +67,13 @@ def _surface(nodes, segments, dtype):
     return jaxcontact.Surface(
         jnp.asarray(np.asarray(nodes, dtype)), jnp.asarray(np.asarray(segments, np.int32))
     )
+
+
+def _largest(values) -> float | None:
+    """The largest of ``values`` ignoring NaN, None when there is none (a JSON null)."""
+    values = np.asarray(values, np.float64)
+    values = values[~np.isnan(values)]
+    return float(values.max()) if values.size else None
 
 
 def _gap_errors(x, nodes, segments, dtype):
@@ -88,10 +106,11 @@ def _unit_segment(rng, count):
     return x, np.stack([a, a + direction])
 
 
-def study_offset(rng, samples):
+def study_offset(rng, samples, offsets=OFFSETS) -> list[dict]:
     rows = []
     for name, dtype in DTYPES.items():
-        for offset in [0.0] + [10.0**k for k in range(0, 8)]:
+        eps = float(np.finfo(dtype).eps)
+        for offset in offsets:
             errors, scales = [], []
             for _ in range(samples):
                 x, nodes = _unit_segment(rng, 64)
@@ -99,28 +118,25 @@ def study_offset(rng, samples):
                 errors.append(error)
                 scales.append(scale)
             error, scale = np.concatenate(errors), np.concatenate(scales)
-            eps = float(np.finfo(dtype).eps)
             rows.append(
                 {
                     "dtype": name,
                     "offset": offset,
-                    "max_gap_error": float(np.nanmax(error)),
-                    "max_error_in_eps_of_scale": float(np.nanmax(error / (eps * scale))),
-                    "bound_in_eps_of_scale": ULPS,
+                    ERROR: _largest(error),
+                    IN_EPS: _largest(error / (eps * scale)),
                     # What rounding the inputs to the dtype costs, before any
                     # arithmetic: the geometry itself moves by this much.
-                    "input_rounding": float(np.spacing(dtype(offset))) / 2,
+                    "input rounding": float(np.spacing(dtype(offset))) / 2,
                 }
             )
     return rows
 
 
-def study_length(rng, samples):
+def study_length(rng, samples, lengths=LENGTHS) -> list[dict]:
     rows = []
     for name, dtype in DTYPES.items():
         eps = float(np.finfo(dtype).eps)
-        for exponent in range(-9, 1):
-            length = 10.0**exponent
+        for length in lengths:
             errors, scales, collapsed = [], [], 0
             for _ in range(samples):
                 angle = rng.uniform(0, 2 * np.pi)
@@ -134,25 +150,25 @@ def study_length(rng, samples):
                 error, scale = _gap_errors(x, nodes, [[0, 1]], dtype)
                 errors.append(error)
                 scales.append(scale)
-            row = {"dtype": name, "length": length, "collapsed": collapsed}
-            if errors:
-                error, scale = np.concatenate(errors), np.concatenate(scales)
-                row.update(
-                    max_gap_error=float(np.nanmax(error)),
-                    max_error_in_eps_of_scale=float(np.nanmax(error / (eps * scale))),
-                )
-            else:
-                row.update(max_gap_error=math.nan, max_error_in_eps_of_scale=math.nan)
-            rows.append(row)
+            error = np.concatenate(errors) if errors else np.array([])
+            scale = np.concatenate(scales) if scales else np.array([])
+            rows.append(
+                {
+                    "dtype": name,
+                    "length": length,
+                    "collapsed": collapsed,
+                    ERROR: _largest(error),
+                    IN_EPS: _largest(error / (eps * scale)),
+                }
+            )
     return rows
 
 
-def study_angle(rng, samples):
+def study_angle(rng, samples, angles=ANGLES) -> list[dict]:
     rows = []
     for name, dtype in DTYPES.items():
         eps = float(np.finfo(dtype).eps)
-        for exponent in [-8, -7, -6, -5, -4, -3, -2, -1, 0]:
-            angle = min(10.0**exponent, np.pi / 2)
+        for angle in angles:
             errors, bounds, missed, unexplained = [], [], 0, 0
             for _ in range(samples):
                 # A unit segment on the x axis, turned at random, and paths of
@@ -186,13 +202,11 @@ def study_angle(rng, samples):
             rows.append(
                 {
                     "dtype": name,
-                    "angle": angle,
-                    "max_t_error": float(error.max()) if error.size else math.nan,
-                    "max_error_in_eps_of_conditioning": float(np.max(error / (eps * conditioning)))
-                    if error.size
-                    else math.nan,
-                    "eps_over_sin_angle": eps / math.sin(angle),
-                    "decisions_differing": missed,
+                    "angle rad": angle,
+                    T_ERROR: _largest(error),
+                    T_IN_EPS: _largest(error / (eps * conditioning)),
+                    BOUND: eps / math.sin(angle),
+                    "decisions differing": missed,
                     "unexplained": unexplained,
                 }
             )
@@ -214,13 +228,12 @@ def _tie_scene(kind, delta, count, rng):
     return x + shift, nodes + shift, segments
 
 
-def study_ties(rng, samples):
+def study_ties(rng, samples, deltas=DELTAS) -> list[dict]:
     rows = []
     for name, dtype in DTYPES.items():
         eps = float(np.finfo(dtype).eps)
         for kind in ("corner", "parallel"):
-            for exponent in range(-16, -1, 2):
-                delta = 10.0**exponent
+            for delta in deltas:
                 wrong = unexplained = total = 0
                 for _ in range(samples):
                     x, nodes, segments = _tie_scene(kind, delta, 64, rng)
@@ -234,34 +247,34 @@ def study_ties(rng, samples):
                         pairs = oracle.exact_pairs(x[row], nodes, segments)
                         d = [math.sqrt(float(p.distance_squared)) for p in pairs]
                         bound = 2 * ULPS * eps * max(p.scale for p in pairs)
-                        unexplained += abs(d[0] - d[1]) > bound
+                        unexplained += int(abs(d[0] - d[1]) > bound)
                 rows.append(
                     {
                         "dtype": name,
                         "tie": kind,
                         "delta": delta,
-                        "wrong_choice_rate": wrong / total,
+                        RATE: wrong / total,
                         "unexplained": unexplained,
                     }
                 )
     return rows
 
 
-# Printed with the tables, so that RESULTS.md (benchmarks/results.py) says
-# what each one measured; what the figures mean is in benchmarks/results/notes.md.
-INTRO = """Every reference value comes from the exact rational oracle of the test
-suite (`tests/oracle.py`, `fractions.Fraction`) evaluated on the very inputs
-the library sees (already rounded to float32 or float64), so an error here is
-the library's arithmetic alone. The figures are not timings: seeded and
-exact, they are the same on any machine. "scale" is `|x - a| + |b - a|` for
-the chosen segment, the length the error is made of; the property tests
-assert `|gap - exact| <= 8 eps scale`."""
+INTRO = (
+    "Every reference value comes from the exact rational oracle of the test suite "
+    "(`tests/oracle.py`, `fractions.Fraction`) evaluated on the very inputs the library sees "
+    "(already rounded to float32 or float64), so an error here is the library's arithmetic "
+    'alone. Seeded and exact: the same on any machine. "scale" is `|x - a| + |b - a|` for '
+    "the chosen segment, the length the error is made of; the property tests assert "
+    f"`|gap - exact| <= {ULPS} eps scale`."
+)
+# Study -> (table title, what it did: the table's note).
 STUDIES = {
     "offset": (
         "Gap error against the coordinates' offset",
         "A unit segment at a random angle, 64 slaves within 0.5 of it, the scene shifted by "
         "`offset` (`all_to_all`; `bucket_sort` evaluates the same kernel on the same pair). "
-        "`input_rounding` is half an ulp of the offset: what rounding the inputs costs.",
+        "`input rounding` is half an ulp of the offset: what rounding the inputs costs.",
     ),
     "length": (
         "Gap error against the segment length",
@@ -270,112 +283,131 @@ STUDIES = {
     ),
     "angle": (
         "Crossing time against the angle between path and segment",
-        "Paths of length 1 crossing a unit segment at an angle of 1e-8 to 1 rad, against the "
-        "conditioning `eps / sin(angle)` (dotted in the plot); a differing crossed/not-crossed "
-        "decision is explained when an orientation test lies within its rounding of zero "
+        "Paths of length 1 crossing a unit segment at an angle of 1e-8 to 1 rad (`swept`), "
+        "against the conditioning `eps / sin(angle)`; a differing crossed/not-crossed decision "
+        "is explained when an orientation test lies within its rounding of zero "
         "(`unexplained` counts the others).",
     ),
     "ties": (
         "Segment choices near a tie",
         "Slaves at a relative distance delta from an exact tie: the bisector of a corner (faces "
         "meeting at 33 degrees) or the midline between two parallel faces, shifted by up to 2 "
-        "from the origin. `unexplained` counts choices that differ from the oracle's although "
-        "the two exact distances differ by more than the float bound (2 x 8 eps scale).",
+        f"from the origin. `unexplained` counts choices that differ from the oracle's although "
+        f"the two exact distances differ by more than the float bound (2 x {ULPS} eps scale).",
     ),
 }
 
 
-def _write_csv(rows, path):
-    with open(path, "w", newline="") as handle:
-        writer = csv.DictWriter(handle, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
+def verdict(studies) -> str:
+    """The checks in one line: every gap error within the property tests' bound, and no
+    decision or choice that the float bound does not explain."""
+    worst = {
+        name: max(
+            (
+                row[IN_EPS]
+                for key in ("offset", "length")
+                for row in studies[key]
+                if row["dtype"] == name and row[IN_EPS] is not None
+            ),
+            default=0.0,
+        )
+        for name in DTYPES
+    }
+    unexplained = sum(row["unexplained"] for key in ("angle", "ties") for row in studies[key])
+    within = all(value <= ULPS for value in worst.values())
+    largest = ", ".join(f"{value:.3g} ({name})" for name, value in worst.items())
+    return (
+        f"Largest gap error in units of eps scale: {largest}; "
+        + (f"within the bound {ULPS}. " if within else f"**above the bound {ULPS}**. ")
+        + (
+            "No differing decision or segment choice is left unexplained by the float bound."
+            if unexplained == 0
+            else f"**{unexplained} differing decisions or choices the float bound does not "
+            "explain.**"
+        )
+    )
 
 
-def _table(rows):
-    keys = list(rows[0])
-    lines = ["| " + " | ".join(keys) + " |", "|" + "---|" * len(keys)]
-    for row in rows:
-        cells = [f"{v:.3g}" if isinstance(v, float) else str(v) for v in row.values()]
-        lines.append("| " + " | ".join(cells) + " |")
-    return "\n".join(lines)
-
-
-def _plot(rows, x_key, y_keys, path, title, xlabel, ylabel, group="dtype", log_y=True):
-    """One line per ``group`` and ``y_keys`` entry; an entry whose format has no marker (a
-    bound) drawn as that group's guide. Looks from ``benchmarks.harness.style``."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from benchmarks.harness import style
-
-    figure, axes = plt.subplots(figsize=(8, 4), layout="constrained")
-    used = {}
-    for label in sorted({row[group] for row in rows}):
-        mine = [row for row in rows if row[group] == label]
-        for y_key, fmt in y_keys:
-            bound = not any(marker in fmt for marker in "os^vD*+x.")
-            looks = style.style(f"{label.split()[0]} bound" if bound else label, used)
-            xs = [max(row[x_key], 1e-1) if x_key == "offset" else row[x_key] for row in mine]
-            ys = [max(row[y_key], 1e-20) if log_y else row[y_key] for row in mine]
-            axes.plot(xs, ys, **looks, label=f"{label}: {y_key}", clip_on=log_y)
-    axes.set_xscale("log")
-    if log_y:
-        axes.set_yscale("log")
-    else:
-        axes.set_ylim(bottom=0)  # a rate: 0 and up, the zeros on the axis, no negative tick
-    if x_key == "offset":  # 0 drawn at 0.1, labelled 0
-        style.log_axis_from_zero(axes.xaxis, 0.1, max(row[x_key] for row in rows))
-        xlabel = xlabel.replace(" (0 drawn at 0.1)", "")
-    axes.set_title(title)
-    axes.set_xlabel(xlabel)
-    axes.set_ylabel(ylabel)
-    axes.grid(True, which="major", alpha=0.3)
-    style.legend_outside(axes)
-    figure.savefig(path, dpi=110)
-    plt.close(figure)
-
-
-def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="fewer samples: a smoke test")
-    parser.add_argument("--out", default=str(ROOT / "benchmarks" / "out" / "stability"))
-    parser.add_argument("--seed", type=int, default=0)
-    args = parser.parse_args(argv)
-    out = pathlib.Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+def run(args) -> dict:
+    """The four studies, seeded (``--seed``); ``--quick`` takes 2 samples a point, not 16."""
+    if not jax.config.jax_enable_x64:
+        raise RuntimeError("the float64 studies need jax_enable_x64")
     samples = 2 if args.quick else 16
     rng = np.random.default_rng(args.seed)
-
     studies = {
-        "offset": study_offset(rng, samples),
-        "length": study_length(rng, samples),
-        "angle": study_angle(rng, samples),
-        "ties": study_ties(rng, samples),
+        "offset": study_offset(rng, samples, OFFSETS),
+        "length": study_length(rng, samples, LENGTHS),
+        "angle": study_angle(rng, samples, ANGLES),
+        "ties": study_ties(rng, samples, DELTAS),
     }
-    print(INTRO)
-    for name, rows in studies.items():
-        _write_csv(rows, out / f"stability_{name}.csv")
-        title, method = STUDIES[name]
-        picture = f"![{title}](stability_{name}.png)"
-        print(f"\n### {title}\n\n{method}\n\n{picture}\n\n{_table(rows)}")
-    _plot(studies["offset"], "offset", [("max_gap_error", "o-")], out / "stability_offset.png",
-          "Gap error against coordinate offset (unit segment)", "offset (0 drawn at 0.1)",
-          "max |gap - exact|")  # fmt: skip
-    _plot(studies["length"], "length", [("max_gap_error", "o-")], out / "stability_length.png",
-          "Gap error against segment length (slaves ~1 away)", "segment length",
-          "max |gap - exact|")  # fmt: skip
-    _plot(studies["angle"], "angle", [("max_t_error", "o-"), ("eps_over_sin_angle", "k:")],
-          out / "stability_angle.png", "Crossing-time error against path-segment angle",
-          "angle (rad)", "max |t - exact|")  # fmt: skip
-    ties = [dict(row, group=f"{row['dtype']} {row['tie']}") for row in studies["ties"]]
-    _plot(ties, "delta", [("wrong_choice_rate", "o-")], out / "stability_ties.png",
-          "Segment choices differing from the exact oracle near a tie",
-          "relative distance from the tie", "rate", group="group", log_y=False)  # fmt: skip
-    print(f"\nCSV and PNG files in {out}")
+    tables = [
+        report.table(list(studies[name][0]), studies[name], title=title, note=note)
+        for name, (title, note) in STUDIES.items()
+    ]
+    return {
+        "title": "Numerical stability against the exact oracle",
+        "tables": tables,
+        "data": {"samples per point": samples, "slaves per sample": 64, "seed": args.seed},
+        "notes": [INTRO, verdict(studies)],
+    }
 
+
+def _table(record, study: str) -> list[dict]:
+    """The rows of ``study``'s table in ``record``, as dicts by column."""
+    title = STUDIES[study][0]
+    (found,) = [t for t in record["tables"] if t["title"] == title]
+    return [dict(zip(found["columns"], row, strict=True)) for row in found["rows"]]
+
+
+def draw(record, plt):
+    """Four panels, one per study, drawn from the record's tables; one legend for all."""
+    from benchmarks.harness import style
+
+    figure, panels = plt.subplots(2, 2, figsize=(12, 7.5))
+    (offset, length), (angle, ties) = panels
+    used = {}
+
+    def series(axes, rows, x_key, y_key, group, label=None, floor=None, clip=True):
+        for name in dict.fromkeys(row[group] for row in rows):
+            points = [
+                (row[x_key], row[y_key])
+                for row in rows
+                if row[group] == name and row[y_key] is not None
+            ]
+            if floor is not None:  # a log axis: 0 drawn at the floor
+                points = [(max(x, floor), y) for x, y in points]
+            shown = label(name) if label else name
+            looks = style.style(shown, used)
+            axes.plot(*zip(*points, strict=True), **looks, label=shown, clip_on=clip)
+
+    shifted = _table(record, "offset")
+    series(offset, shifted, "offset", ERROR, "dtype", floor=0.1)
+    series(length, _table(record, "length"), "length", ERROR, "dtype")
+    rows = _table(record, "angle")
+    series(angle, rows, "angle rad", T_ERROR, "dtype")
+    series(angle, rows, "angle rad", BOUND, "dtype", label=lambda name: f"{name} bound")
+    rows = [{**row, "series": f"{row['dtype']} {row['tie']}"} for row in _table(record, "ties")]
+    series(ties, rows, "delta", RATE, "series", clip=False)  # the zeros on the axis, whole
+
+    offset.set(xscale="log", yscale="log", xlabel="offset of the coordinates")
+    style.log_axis_from_zero(offset.xaxis, 0.1, max(row["offset"] for row in shifted))
+    offset.set(ylabel="max |gap - exact|", title="Gap error against offset (unit segment)")
+    length.set(xscale="log", yscale="log", xlabel="segment length")
+    length.set(ylabel="max |gap - exact|", title="Gap error against segment length")
+    angle.set(xscale="log", yscale="log", xlabel="angle between path and segment (rad)")
+    angle.set(ylabel="max |t - exact|", title="Crossing-time error against angle")
+    where = {"transform": angle.transAxes, "ha": "right", "va": "top"}
+    angle.text(0.97, 0.95, "dotted: eps / sin(angle)", **where, fontsize=8, color="#555555")
+    ties.set(xscale="log", xlabel="relative distance from the tie", ylabel="rate")
+    ties.set_ylim(bottom=0)  # a rate: 0 and up, no negative tick
+    ties.set_title("Segment choices differing from the oracle near a tie")
+    for axes in (offset, length, angle, ties):
+        axes.grid(True, which="major", alpha=0.3)
+    style.legend_outside(length)
+    return figure
+
+
+OPTIONS = ((("--seed",), {"type": int, "default": 0, "help": "the studies' random seed"}),)
 
 if __name__ == "__main__":
-    main()
+    sys.exit(_run.suite("stability", run, draw, __doc__.splitlines()[0], options=OPTIONS))

@@ -15,14 +15,22 @@ moved by ``(o, o)``, ``o`` from 1 to 10^6): against the float64 scene, and
 against the float64 answer for the rounded float32 inputs (the library's own
 arithmetic).
 
-    python benchmarks/time_vs_error.py [--quick] [--out DIR]
+The figure: per scene, run time against wrong rows (missed + false + wrong
+segment) and against the largest gap error, each with its Pareto front; right,
+part 2's float32 gap error against the offset, against the float64 scene and
+against the rounded inputs, on one scale. Writes ``<out>/time_vs_error.json``
+and ``<out>/time_vs_error.png`` (default ``--out benchmarks/results``) and
+prints the record's markdown.
+
+    python benchmarks/time_vs_error.py            # both scenes (the die's all_to_all: 8 s a call)
+    python benchmarks/time_vs_error.py --quick    # the cutting scene at 5,000 nodes, fewer sizes
+    taskset -c 0 python benchmarks/time_vs_error.py --out benchmarks/results/pinned
 """
 
 from __future__ import annotations
 
 import dataclasses
 import functools
-import os
 import pathlib
 import sys
 
@@ -32,7 +40,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from benchmarks.harness import _run, answers
+from benchmarks.harness import _run, answers, report
 from benchmarks.harness.internals import measure
 from benchmarks.harness.timing import time_interleaved
 from jaxcontact import all_to_all, bucket_sort
@@ -87,7 +95,20 @@ def variants(scene64: Scene, quick: bool) -> dict:
     return calls
 
 
+def _fields(mismatch) -> dict:
+    """A ``Mismatch`` as table cells."""
+    return {
+        "missed": mismatch.missed,
+        "false": mismatch.false,
+        "wrong segment": mismatch.wrong_segment,
+        "ties": mismatch.ties,
+        "max gap error": mismatch.max_gap_error,
+    }
+
+
 def run_tradeoff(label, scene64, repeats, quick) -> list[dict]:
+    """Every variant on ``scene64``, timed round-robin, each checked against all_to_all in
+    float64; one row each (the table's columns, and the spread and ``wrong by`` beside)."""
     x64 = np.asarray(scene64.x)
     start, end = _run.endpoints(scene64.surface)
     reference = answers.reference_contact(x64, scene64.surface, scene64.radius)
@@ -97,17 +118,32 @@ def run_tradeoff(label, scene64, repeats, quick) -> list[dict]:
     for name, (fn, args) in calls.items():
         result = fn(*args)
         mismatch = _run.check(result, x64, start, end, reference)
-        entry = _run.row(label, len(x64), len(start), name, timings[name], mismatch)
-        overflow = " (overflow)" if bool(result.overflow) else ""
-        entry.update(dtype=str(args[0].dtype), note=answers.describe(mismatch) + overflow)
-        rows.append(entry)
+        timing = timings[name]
+        rows.append(
+            {
+                "scene": label,
+                "nodes": len(x64),
+                "method": name,
+                "median ms": timing.median_s * 1e3,
+                **_fields(mismatch),
+                "overflow": bool(result.overflow),
+                "p10 ms": timing.p10_s * 1e3,
+                "p90 ms": timing.p90_s * 1e3,
+                "runs": timing.runs,
+                "wrong by": mismatch.wrong_by,
+            }
+        )
     return rows
 
 
 def run_offsets(num_nodes, offsets, with_bucket) -> list[dict]:
-    """float32 gap error of the cutting scene moved by ``(o, o)``, for each offset ``o``."""
+    """float32 gap error of the cutting scene moved by ``(o, o)``, for each offset ``o``:
+    against the float64 scene, and against the float64 answer for the rounded inputs."""
     base = cutting_scene(num_nodes, 18.0, dtype=jnp.float64)
-    detectors = {"all_to_all": jax.jit(functools.partial(all_to_all, radius=base.radius))}
+    detectors = {"all_to_all f32": jax.jit(functools.partial(all_to_all, radius=base.radius))}
+    if with_bucket:
+        # Not timed here: the one-call form, its sizes measured for each scene.
+        detectors["bucket_sort f32"] = functools.partial(bucket_sort, radius=base.radius)
     rows = []
     for offset in _run.progress(offsets, "offsets"):
         moved = base._replace(
@@ -115,9 +151,6 @@ def run_offsets(num_nodes, offsets, with_bucket) -> list[dict]:
             surface=base.surface._replace(nodes=base.surface.nodes + offset),
         )
         scene = _cast(moved, jnp.float32)
-        if with_bucket:
-            # Not timed here: the one-call form, its sizes measured for this scene.
-            detectors["bucket_sort"] = functools.partial(bucket_sort, radius=base.radius)
         start, end = _run.endpoints(moved.surface)
         exact = answers.reference_contact(np.asarray(moved.x), moved.surface, base.radius)
         start32, end32 = _run.endpoints(scene.surface)
@@ -127,144 +160,149 @@ def run_offsets(num_nodes, offsets, with_bucket) -> list[dict]:
             result = detect(scene.x, scene.surface)
             mismatch = _run.check(result, np.asarray(moved.x), start, end, exact)
             own = _run.check(result, x32, start32, end32, rounded)
-            entry = _run.row("cutting, moved by (o, o)", len(x32), len(start), name, None, mismatch)
-            entry.update(position=f"o={offset:g}", dtype="float32")
-            entry["note"] = (
-                f"{answers.describe(mismatch)}; against its rounded inputs: "
-                f"{answers.describe(own)}, max gap error {own.max_gap_error:.3g}"
+            rows.append(
+                {
+                    "offset o": offset,
+                    "method": name,
+                    **_fields(mismatch),
+                    "own max gap error": own.max_gap_error,
+                    "own check": answers.describe(own),
+                }
             )
-            rows.append(entry)
     return rows
 
 
-def _wrong_rows(row) -> int:
-    return row["missed"] + row["false"] + row["wrong_segment"]
+TRADEOFF = ("scene", "nodes", "method", "median ms", "missed", "false", "wrong segment", "ties")
+TRADEOFF += ("max gap error", "overflow")
+OFFSET = ("offset o", "method", "missed", "false", "wrong segment", "ties", "max gap error")
+OFFSET += ("own max gap error", "own check")
+TITLES = ("Run time against error", "float32 gap error against coordinate offset")
 
 
-def plot(rows, out) -> list[str]:
-    """Pareto plots (run time against wrong rows, and against the largest gap error) per
-    scene, and the float32 gap error against the offset; one look per method (``style``)."""
-    plt = _run.pyplot(out)
-    if plt is None:
-        return []
-    from benchmarks.harness import style
-
-    paths = []
-    tradeoff = [r for r in rows if r["median_ms"] != ""]
-    scenes = list(dict.fromkeys(r["scene"] for r in tradeoff))
-    figure, panels = plt.subplots(
-        2, len(scenes), figsize=(5.5 * len(scenes) + 3.5, 8), squeeze=False
-    )
-    used = {}
-    for column, scene in enumerate(scenes):
-        mine = [r for r in tradeoff if r["scene"] == scene]
-        for axes, metric in (
-            (panels[0][column], _wrong_rows),
-            (panels[1][column], lambda r: max(float(r["max_gap_error"]), 1e-17)),
-        ):
-            points = sorted((r["median_ms"], metric(r)) for r in mine)
-            front, best = [], np.inf
-            for time_ms, error in points:  # Pareto front: no faster point is as accurate
-                if error < best:
-                    front.append((time_ms, error))
-                    best = error
-            for row in mine:  # in the order run: the same legend order in every panel
-                looks = {**style.style(row["method"], used), "linestyle": "none"}
-                looks["markersize"] += 3
-                axes.plot(row["median_ms"], metric(row), **looks, label=row["method"], zorder=2)
-            front_looks = style.style("Pareto front", used)
-            axes.plot(*zip(*front, strict=True), **front_looks, label="Pareto front", zorder=1)
-            axes.set_xscale("log")
-            axes.set(xlabel="median run time (ms)", title=scene)
-            axes.grid(True, which="major", alpha=0.3)
-        counts, errors = panels[0][column], panels[1][column]
-        style.count_axis(counts, max(_wrong_rows(r) for r in mine))
-        counts.set_ylabel("wrong rows: missed + false + wrong segment\n(0, then log above 1)")
-        errors.set_yscale("log")
-        exact = any(float(r["max_gap_error"]) == 0 for r in mine)
-        errors.set_ylabel("largest gap error" + (" (0 drawn at 1e-17)" if exact else ""))
-        for axes in (counts, errors):
-            style.plain_log_labels(axes.xaxis)
-    style.legend_outside(panels[0][-1])
-    figure.tight_layout()
-    paths.append(os.path.join(out, "time_vs_error.png"))
-    figure.savefig(paths[-1], dpi=120)
-    plt.close(figure)
-
-    offsets = [r for r in rows if r["position"].startswith("o=")]
-    if offsets:
-        figure, axes = plt.subplots(figsize=(8, 4.5), layout="constrained")
-        used = {}
-        names = list(dict.fromkeys(r["method"] for r in offsets))
-        for index, name in enumerate(names):
-            mine = [r for r in offsets if r["method"] == name]
-            xs = [max(float(r["position"][2:]), 0.1) for r in mine]
-            looks = style.style(name, used)
-            # Methods may agree exactly: each earlier one drawn wider, to show beneath.
-            wider = len(names) - 1 - index
-            looks["markersize"] += 4 * wider
-            looks["linewidth"] += 2.5 * wider
-            axes.plot(xs, [float(r["max_gap_error"]) for r in mine], **looks, label=name)
-        grid = np.logspace(0, 6, 50)
-        ulp = "one float32 ulp of o"
-        axes.plot(grid, np.spacing(np.float32(grid)), **style.style(ulp, used), label=ulp)
-        axes.set(
-            xscale="log",
-            yscale="log",
-            xlabel="coordinate offset o",
-            ylabel="largest float32 gap error",
-            title="float32 gap error against offset",
-        )
-        top = max(float(r["position"][2:]) for r in offsets)
-        style.log_axis_from_zero(axes.xaxis, 0.1, top)
-        axes.grid(True, which="major", alpha=0.3)
-        style.legend_outside(axes)
-        paths.append(os.path.join(out, "gap_error_vs_offset.png"))
-        figure.savefig(paths[-1], dpi=120)
-        plt.close(figure)
-    return paths
-
-
-def run(quick: bool, out: str, repeats: int | None = None) -> str:
-    """Runs both parts, writes CSV/markdown/PNGs into ``out``; returns the markdown."""
-    repeats = repeats or (5 if quick else 20)
+def run(args) -> dict:
+    """Both parts; ``--quick``: the cutting scene at 5,000 nodes, fewer sizes and offsets."""
+    quick = args.quick
+    repeats = args.repeats or (5 if quick else 20)
     cutting_nodes = 5_000 if quick else 81_939
     # The die's all_to_all evaluates 10^9 pairs a call: 5 runs, not 20.
     scenes = [
         ("cutting, x_tip=18", lambda: cutting_scene(cutting_nodes, 18.0, dtype=jnp.float64), 1),
         ("rough die", lambda: rough_die_scene(10**5, 10**4, dtype=jnp.float64), 0.25),
     ]
-    rows = []
+    timed = []
     for label, build, share in _run.progress(scenes[:1] if quick else scenes, "time vs error"):
-        rows += run_tradeoff(label, build(), max(3, round(repeats * share)), quick)
+        timed += run_tradeoff(label, build(), max(3, round(repeats * share)), quick)
     offsets = OFFSETS[::2] if quick else OFFSETS
-    rows += run_offsets(5_000 if quick else 81_939, offsets, with_bucket=not quick)
-    pictures = plot(rows, out)
-    timed = [r for r in rows if r["median_ms"] != ""]
-    shifted = [r for r in rows if r["median_ms"] == ""]
-    columns = (
-        "scene",
-        "nodes",
-        "method",
-        "median_ms",
-        "p10_ms",
-        "p90_ms",
-        "runs",
-        "missed",
-        "false",
+    shifted = run_offsets(cutting_nodes, offsets, with_bucket=not quick)
+    tradeoff_note = (
+        'Medians of interleaved runs; "(sized)": the bucket sort at sizes measured outside '
+        "the timer, its whole search inside. Each answer checked against all_to_all in "
+        "float64 on the float64 scene: missed and false contacts, wrong segments (farther "
+        "than the closest), ties (another segment at the same distance), the largest gap "
+        "error. `overflow`: the sizes were too small for the scene (contacts may be missed)."
     )
-    body = [
-        _run.markdown(timed, (*columns, "wrong_segment", "ties", "max_gap_error", "note")),
-        "",
-        "### float32 gap error against coordinate offset",
-        "",
-        _run.markdown(shifted, ("position", "method", "missed", "false", "max_gap_error", "note")),
-    ]
-    note = "medians of interleaved runs; errors against all_to_all in float64 on the float64 scene."
-    text = _run.section("time_vs_error", "Run time against error", quick, note, body, pictures)
-    _run.write(out, "time_vs_error", rows, text)
-    return text
+    offset_note = (
+        "The cutting scene moved by `(o, o)`, searched in float32. `max gap error` and the "
+        "counts: against the float64 scene; `own max gap error` and `own check`: against the "
+        "float64 answer for the rounded float32 inputs (the library's own arithmetic)."
+    )
+    spread = ("scene", "method", "p10 ms", "p90 ms", "runs", "wrong by")
+    return {
+        "title": "Run time against error",
+        "tables": [
+            report.table(TRADEOFF, timed, title=TITLES[0], note=tradeoff_note),
+            report.table(OFFSET, shifted, title=TITLES[1], note=offset_note),
+        ],
+        "data": {"spread": [{key: row[key] for key in spread} for row in timed]},
+        "notes": [],
+    }
 
 
-def main(argv=None) -> int:
-    return _run.main(run, __doc__.splitlines()[0], argv)
+def _rows(record, title) -> list[dict]:
+    (found,) = [t for t in record["tables"] if t["title"] == title]
+    return [dict(zip(found["columns"], row, strict=True)) for row in found["rows"]]
+
+
+def _wrong_rows(row) -> int:
+    return row["missed"] + row["false"] + row["wrong segment"]
+
+
+def _error(row) -> float:
+    return max(row["max gap error"], 1e-17)  # a log axis: an exact answer drawn at 1e-17
+
+
+def _front(points):
+    """The Pareto front of ``(time, error)`` points: no faster point is as accurate."""
+    front, best = [], np.inf
+    for time_ms, error in sorted(points):
+        if error < best:
+            front.append((time_ms, error))
+            best = error
+    return front
+
+
+def draw(record, plt):
+    """Per scene, run time against wrong rows (top) and against the largest gap error (below),
+    with their Pareto fronts; right, the float32 gap error against the offset, against the
+    float64 scene (top) and against the rounded inputs' own answer (below)."""
+    from benchmarks.harness import style
+
+    tradeoff, shifted = _rows(record, TITLES[0]), _rows(record, TITLES[1])
+    scenes = list(dict.fromkeys(r["scene"] for r in tradeoff))
+    figure, panels = plt.subplots(
+        2, len(scenes) + 1, figsize=(5 * len(scenes) + 8.5, 8), squeeze=False
+    )
+    used = {}
+    for column, scene in enumerate(scenes):
+        mine = [r for r in tradeoff if r["scene"] == scene]
+        counts, errors = panels[0][column], panels[1][column]
+        for axes, metric in ((counts, _wrong_rows), (errors, _error)):
+            for row in mine:  # in the order run: the same legend order in every panel
+                looks = {**style.style(row["method"], used), "linestyle": "none"}
+                looks["markersize"] += 3
+                axes.plot(row["median ms"], metric(row), **looks, label=row["method"], zorder=2)
+            front = _front((r["median ms"], metric(r)) for r in mine)
+            looks = style.style("Pareto front", used)
+            axes.plot(*zip(*front, strict=True), **looks, label="Pareto front", zorder=1)
+            axes.set_xscale("log")
+            axes.set(xlabel="median run time (ms)", title=scene)
+            axes.grid(True, which="major", alpha=0.3)
+        style.count_axis(counts, max(_wrong_rows(r) for r in mine))
+        counts.set_ylabel("wrong rows: missed + false + wrong segment\n(0, then log above 1)")
+        errors.set_yscale("log")
+        exact = any(r["max gap error"] == 0 for r in mine)
+        errors.set_ylabel("largest gap error" + (" (0 drawn at 1e-17)" if exact else ""))
+        for axes in (counts, errors):
+            style.plain_log_labels(axes.xaxis)
+
+    against, own = panels[0][-1], panels[1][-1]
+    names = list(dict.fromkeys(r["method"] for r in shifted))
+    top = max(r["offset o"] for r in shifted)
+    for axes, key in ((against, "max gap error"), (own, "own max gap error")):
+        for index, name in enumerate(names):
+            mine = [r for r in shifted if r["method"] == name]
+            looks = style.style(name, used)
+            # Methods may agree exactly: each earlier one drawn wider, to show beneath.
+            wider = len(names) - 1 - index
+            looks["markersize"] += 4 * wider
+            looks["linewidth"] += 2.5 * wider
+            xs = [max(r["offset o"], 0.1) for r in mine]  # 0 drawn at 0.1
+            axes.plot(xs, [max(r[key], 1e-17) for r in mine], **looks, label=name)
+        axes.set(xscale="log", yscale="log", xlabel="coordinate offset o")
+        style.log_axis_from_zero(axes.xaxis, 0.1, top)
+        axes.grid(True, which="major", alpha=0.3)
+    grid = np.logspace(0, np.log10(max(top, 10)), 50)
+    ulp = "one float32 ulp of o"
+    against.plot(grid, np.spacing(np.float32(grid)), **style.style(ulp, used), label=ulp)
+    against.set(ylabel="largest float32 gap error", title="float32, against the float64 scene")
+    own.set(ylabel="largest float32 gap error", title="float32, against its rounded inputs")
+    low = min(own.get_ylim()[0], against.get_ylim()[0])
+    high = max(own.get_ylim()[1], against.get_ylim()[1])
+    for axes in (against, own):
+        axes.set_ylim(low, high)  # one scale: the offset's share of the error at a glance
+    style.legend_outside(against)
+    return figure
+
+
+if __name__ == "__main__":
+    sys.exit(_run.suite("time_vs_error", run, draw, __doc__.splitlines()[0]))

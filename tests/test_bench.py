@@ -284,38 +284,6 @@ def test_size_scaling_rows_slopes_and_figure(tmp_path, monkeypatch):
         assert (tmp_path / "size_scaling.png").exists()
 
 
-@pytest.mark.x64
-def test_sizes_too_small_are_counted_as_missed_contacts():
-    from benchmarks import time_vs_error
-    from jaxcontact._pipeline.sizes import measure
-
-    scene = cutting_scene(2_000, 18.0)
-    x, start, end = _scene_arrays(scene)
-    reference = answers.reference_contact(x, scene.surface, scene.radius)
-    sizes = measure(scene.x, scene.surface, radius=scene.radius)
-    right = _run.sized_contact(scene.radius, sizes)(scene.x, scene.surface)
-    assert not bool(right.overflow)
-    assert _run.check(right, x, start, end, reference).missed == 0
-    small = time_vs_error._shrunk(sizes, block_capacity=0.25)
-    assert small.block_capacity == max(1, int(sizes.block_capacity * 0.25))
-    contact = _run.sized_contact(scene.radius, small)(scene.x, scene.surface)
-    mismatch = _run.check(contact, x, start, end, reference)
-    assert bool(contact.overflow) and mismatch.missed > 0
-
-
-@pytest.mark.x64  # the reference is all_to_all in float64
-def test_paper_test1_rows():
-    from benchmarks import paper_tests
-
-    rows = paper_tests.run_test1((1,), repeats=1)
-    assert [row["method"] for row in rows] == list(paper_tests.METHODS)
-    assert all(row["nodes"] == 4 and row["median_ms"] > 0 for row in rows)
-    assert rows[0]["note"] == "same contacts"  # all_to_all against itself in float64
-    assert "0 rows differ" in rows[2]["note"]  # swept against the float64 brute force
-    assert "0 rows differ" in rows[3]["note"]  # bucket_swept (sized), likewise
-    assert "| all_to_all |" in paper_tests.averages(rows)
-
-
 def test_compile_ops_sorts_a_programs_kernels_by_kind():
     """benchmarks/compile_ops.py's census: a reduction, a gather and a sort, each found."""
     import jax

@@ -140,20 +140,6 @@ def test_unknown_names_never_share_a_colour_in_a_figure():
     assert [style.style(n, again) for n in names] == [style.style(n, used) for n in names]
 
 
-def test_time_vs_error_figures(tmp_path, drawn):
-    from benchmarks import time_vs_error
-
-    rows = _stored("time_vs_error")
-    paths = time_vs_error.plot(rows, str(tmp_path))
-    assert [pathlib.Path(p).name for p in paths] == ["time_vs_error.png", "gap_error_vs_offset.png"]
-    tradeoff, offsets = drawn
-    counts = [axes for axes in tradeoff.axes if "wrong rows" in axes.get_ylabel()]
-    assert len(counts) == 2
-    _check(tradeoff, counts)
-    _check(offsets)
-    assert offsets.axes[0].xaxis.get_ticklabels()[0].get_text() == "0"  # 0 drawn at 0.1
-
-
 def test_peers_figure(tmp_path, drawn):
     from benchmarks import peers
 
@@ -161,16 +147,6 @@ def test_peers_figure(tmp_path, drawn):
     (figure,) = drawn
     _check(figure)
     assert len(_series(figure)) >= 12
-
-
-def test_paper_tests_figures(tmp_path, drawn):
-    from benchmarks import paper_tests
-
-    paper_tests.plot(_stored("paper_tests"), str(tmp_path))
-    assert len(drawn) == 2
-    for figure in drawn:
-        _check(figure)
-        assert len(_series(figure)) == 6  # four methods, the paper's two averages
 
 
 def test_size_scaling_figure(tmp_path, drawn):
@@ -185,24 +161,3 @@ def test_size_scaling_figure(tmp_path, drawn):
         assert axes.get_legend() is not None
     # A panel's labels carry its slopes: one colour per method, whatever the slope.
     _check(figure, name=lambda label: label.split(" (slope")[0])
-
-
-def test_stability_figures(tmp_path, drawn):
-    stability = _benchmark("stability")
-    for name, x_key, y_keys in (
-        ("offset", "offset", [("max_gap_error", "o-")]),
-        ("angle", "angle", [("max_t_error", "o-"), ("eps_over_sin_angle", "k:")]),
-    ):
-        rows = _stored(f"stability_{name}")
-        stability._plot(rows, x_key, y_keys, tmp_path / f"{name}.png", name, x_key, "error")
-    rows = _stored("stability_ties")
-    ties = [dict(row, group=f"{row['dtype']} {row['tie']}") for row in rows]
-    stability._plot(
-        ties, "delta", [("wrong_choice_rate", "o-")], tmp_path / "ties.png", "ties", "delta",
-        "rate", group="group", log_y=False,
-    )  # fmt: skip
-    assert len(drawn) == 3
-    for figure in drawn:
-        _check(figure)
-    assert drawn[2].axes[0].get_ylim()[0] == 0  # a rate: from 0
-    assert len(_series(drawn[1])) == 4  # each precision's error and its bound, four colours
