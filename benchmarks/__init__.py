@@ -1,15 +1,14 @@
-"""The benchmarks: standalone scripts, run from the repository root as
-``python benchmarks/<name>.py`` (each puts the root on ``sys.path`` so that
-``benchmarks.*`` and ``tests.oracle`` import), and ``results.py`` that runs
-them and assembles ``RESULTS.md``. Not part of the installed package.
+"""The benchmarks: ten maintained suites, each a script run from the repository root as
+``python benchmarks/<suite>.py`` (each puts the root on ``sys.path`` so that ``benchmarks.*`` and
+``tests.oracle`` import), and ``report.py``, which regenerates the report from their records.
+Not part of the installed package.
 
-The suites ``paper_tests``, ``peers``, ``swept_peers`` and ``time_vs_error``
-each have ``run(quick, out)`` (returns its markdown section, writes CSV and
-PNG files into ``out``) and ``main(argv)``. Their shared code is in
-``harness`` (rows, timing, the check against a reference, figure style, and
-``internals``, the one module importing jaxcontact's private names) and the
-peers' code in ``peer_codes``. Optional packages (matplotlib, tqdm, scipy,
-shapely, jax-md, libigl, numba, ipctk: the ``bench``, ``peers`` and
-``peers2`` extras) are imported where used; a missing one is reported, never
-a crash.
+Every suite has ``run(args)`` (measures; returns its tables and figure data) and
+``draw(record, pyplot)`` (its figure, from the stored record alone), and its command line is
+``harness._run.suite``. Their shared code is in ``harness`` (the record format ``report``,
+rows, timing, the check against a reference, figure style, and ``internals``, the one module
+importing jaxcontact's private names) and the peers' code in ``peer_codes``. Optional packages
+(matplotlib, tqdm, scipy, shapely, jax-md, libigl, numba, ipctk: the ``bench``, ``peers`` and
+``peers2`` extras) are imported where used; a missing one is reported, never a crash.
+``archive/`` holds experiments that are not maintained; nothing here imports them.
 """
