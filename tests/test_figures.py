@@ -154,15 +154,6 @@ def test_time_vs_error_figures(tmp_path, drawn):
     assert offsets.axes[0].xaxis.get_ticklabels()[0].get_text() == "0"  # 0 drawn at 0.1
 
 
-def test_peers_figure(tmp_path, drawn):
-    from benchmarks import peers
-
-    peers.plot(_stored("peers"), str(tmp_path))
-    (figure,) = drawn
-    _check(figure)
-    assert len(_series(figure)) >= 12
-
-
 def test_paper_tests_figures(tmp_path, drawn):
     from benchmarks import paper_tests
 
