@@ -330,7 +330,7 @@ def draw_medians(record, plt, xlabel: str = "slave nodes N"):
         families.setdefault(scene, []).append((nodes, segments))
     grown = [s for s, points in families.items() if len(points) > 1]
     single = [(s, *points[0]) for s, points in families.items() if len(points) == 1]
-    count = len(grown) + bool(single)
+    count = max(len(grown) + bool(single), 1)  # one empty panel where nothing was timed
     figure, panels = plt.subplots(1, count, figsize=(4.6 * count + 3.4, 4.5), squeeze=False)
     panels, used = list(panels[0]), {}
     for axes, scene in zip(panels, grown, strict=False):
