@@ -1,4 +1,7 @@
-"""jaxcontact beside its peers on the path-crossing query: the first crossing of ``x_prev -> x``.
+"""Path crossing, jaxcontact beside its peers: the first crossing of ``x_prev -> x``, timed.
+
+    python benchmarks/swept_peers.py [--quick] [--out DIR] [--repeats K] [--slow S] [--scenes 6,7]
+    taskset -c 0 python benchmarks/swept_peers.py --out benchmarks/results/pinned
 
 Scenes (docs/scenes.md) with motion: the cutting scene with the tool in the
 workpiece (``x_tip = 18``, previous tip 18.2) at 10^4, 81,939 and 10^6
@@ -17,16 +20,16 @@ segment met at the same time to within 1e-9: a path through a vertex shared
 by two segments), ``wrong_segment`` (another segment, met later) and
 ``max_t_error`` (the largest ``|t - t_reference|`` where both cross).
 
-    python benchmarks/swept_peers.py [--quick] [--out DIR] [--scenes 6,7]
-
-``--scenes`` runs the full run's scenes of those numbers only (1 to 7, in
-the order above), to finish a run that was cut short (a lent GPU's time).
+The record (``<out>/swept_peers.json``) and figure (``<out>/swept_peers.png``: each
+method's median against the node count, one panel per scene family, the paper's tests,
+one size each, in a panel of their own) are built as ``peers.py``'s. ``--scenes``
+runs the full run's scenes of those numbers only (1 to 7, in the order above), to
+finish a run that was cut short (a lent GPU's time): the record is written after each
+scene.
 """
 
 from __future__ import annotations
 
-import argparse
-import functools
 import pathlib
 import sys
 
@@ -36,7 +39,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from benchmarks.harness import _run
+from benchmarks import peers
+from benchmarks.harness import _run, report
 from benchmarks.harness.internals import measure
 from benchmarks.peer_codes import baselines, ipc
 from jaxcontact import CrossingList, Search, swept
@@ -139,8 +143,8 @@ def compare_crossing(result, reference, x_prev, x, start, end) -> dict:
         "false": int(np.sum(crossed & ~ref_crossed)),
         "ties": ties,
         "wrong_segment": other.size - ties,
-        "max_t_error": f"{error.max() if error.size else 0.0:.3g}",
-        "note": f"{int(ref_crossed.sum()):,} crossed",
+        "max_t_error": float(error.max()) if error.size else 0.0,
+        "note": "",
     }
 
 
@@ -166,7 +170,8 @@ def _skip_reason(name, pairs) -> str | None:
 
 
 def run_scene(kind, size, parameters, repeats, slow_s) -> list[dict]:
-    """Every method on one scene: checked, then timed round-robin; one row per method."""
+    """Every method on one scene: checked, then timed round-robin; one row per method, its
+    fields JSON scalars (``peers.scalars``)."""
     scene = build(kind, size, parameters)
     x_prev, x = np.asarray(scene.x_prev), np.asarray(scene.x)
     start, end = _run.endpoints(scene.surface)
@@ -184,7 +189,7 @@ def run_scene(kind, size, parameters, repeats, slow_s) -> list[dict]:
             result = (result.segment, result.t, result.crossed)
         return compare_crossing(result, reference, x_prev, x, start, end)
 
-    return _run.run_methods(
+    rows = _run.run_methods(
         methods,
         check,
         repeats=repeats,
@@ -195,47 +200,85 @@ def run_scene(kind, size, parameters, repeats, slow_s) -> list[dict]:
         nodes=len(x),
         segments=len(start),
         dtype=str(x.dtype),
+        crossed=int(reference[2].sum()),
+    )
+    return [peers.scalars(entry) for entry in rows]
+
+
+NOTE = (
+    "float32 inputs; medians of interleaved runs. ratio: a method's median over bucket_swept"
+    " (sized)'s (the bucket sort with its sizes measured outside the timer). Each answer is"
+    " checked against jaxcontact's swept in float64: missed and false crossings, ties (another"
+    " segment met at the same time: a path through a shared vertex), wrong segment (another"
+    " one, met later) and the largest |t - t_reference| where both cross. compile s: tracing,"
+    " lowering and compiling (jit and numba); memory MiB: XLA's temporaries and outputs of a"
+    " jitted method's program."
+)
+TITLE = "Path crossing: jaxcontact and its peers"
+
+
+def scene_title(entry) -> str:
+    return (
+        f"{entry['scene']}: N = {entry['nodes']:,} nodes, M = {entry['segments']:,} segments,"
+        f" {entry['crossed']:,} paths cross"
     )
 
 
-def run(
-    quick: bool,
-    out: str,
-    repeats: int | None = None,
-    slow_s: float | None = None,
-    numbers: tuple[int, ...] | None = None,
-) -> str:
-    """Runs every scene (or those of ``numbers``, counted from 1), writes CSV and
-    markdown into ``out``; returns the markdown."""
-    slow_s = slow_s or (3.0 if quick else 30.0)
-    rows = []
-    scenes = QUICK_SCENES if quick else FULL_SCENES
-    if numbers:
+def _found(runs, notes=()) -> dict:
+    """The record's title, tables, figure data and notes for ``runs``."""
+    return {
+        "title": TITLE,
+        "tables": [
+            peers.ratio_table(runs, LIBRARY, NOTE),
+            *peers.scene_tables(runs, "max_t_error", scene_title),
+        ],
+        "data": {"library": LIBRARY, "runs": runs},
+        "notes": [*notes, *peers.left_out_note(runs)],
+    }
+
+
+def run(args) -> dict:
+    """Every scene of ``args`` (``quick``, ``repeats``, ``slow``; ``scenes``: the numbers,
+    counted from 1, of the scenes to run, all if None): the record's title, tables, figure
+    data and notes. The record so far is written to ``<args.out>/swept_peers.json`` after each
+    scene (no figure), so a run cut short leaves the scenes it measured."""
+    slow_s = args.slow or (3.0 if args.quick else 30.0)
+    scenes = QUICK_SCENES if args.quick else FULL_SCENES
+    if args.scenes:
+        numbers = [int(n) for n in str(args.scenes).split(",")]
         if not all(1 <= n <= len(scenes) for n in numbers):
             raise ValueError(f"scenes: expected numbers from 1 to {len(scenes)}, got {numbers}")
         scenes = tuple(scenes[n - 1] for n in numbers)
+    runs = []
     for done, (kind, size, parameters) in enumerate(_run.progress(scenes, "swept"), 1):
-        count = repeats or (5 if quick else (20 if size <= 10**5 else 5))
-        rows += run_scene(kind, size, parameters, count, slow_s)
-        # Each scene's rows kept as soon as they are measured, as size_scaling.py keeps
-        # them: a lent GPU's time ran out part way (2 of 7 scenes in 135 s), leaving none.
-        _run.write(out, "swept_peers", rows, f"Partial: {done} of {len(scenes)} scenes.\n")
-    columns = ("scene", "nodes", "segments", "method", "compile_s", "median_ms", "p10_ms")
-    more = ("p90_ms", "runs", "ratio", "missed", "false", "ties", "wrong_segment", "max_t_error")
-    note = (
-        "float32 inputs; medians of interleaved runs; ratio = median / bucket_swept (sized)'s"
-        " median; checked against jaxcontact's swept in float64."
-    )
-    body = [_run.markdown(rows, (*columns, *more, "note"))]
-    text = _run.section("swept_peers", "Peers: path crossing", quick, note, body, [])
-    _run.write(out, "swept_peers", rows, text)
-    return text
+        count = args.repeats or (5 if args.quick else (20 if size <= 10**5 else 5))
+        runs += run_scene(kind, size, parameters, count, slow_s)
+        if done < len(scenes):
+            # A lent GPU's time ran out part way once (2 of 7 scenes in 135 s), leaving none.
+            found = _found(runs, [f"Partial: {done} of {len(scenes)} scenes."])
+            partial = report.record(
+                "swept_peers",
+                TITLE,
+                found["tables"],
+                data=found["data"],
+                notes=found["notes"],
+                quick=args.quick,
+            )
+            report.save(partial, args.out)
+    return _found(runs)
 
 
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(add_help=False)
-    parser.add_argument("--scenes", default=None, help="comma-separated scene numbers, from 1")
-    known, rest = parser.parse_known_args(argv)
-    numbers = tuple(int(n) for n in known.scenes.split(",")) if known.scenes else None
-    chosen = functools.partial(run, numbers=numbers)
-    return _run.main(chosen, __doc__.splitlines()[0], rest, slow=True)
+def draw(record, plt):
+    return peers.draw_medians(record, plt, xlabel="nodes N")
+
+
+OPTIONS = (
+    *peers.OPTIONS,
+    (
+        ("--scenes",),
+        {"default": None, "help": "comma-separated numbers of the full run's scenes, from 1"},
+    ),
+)
+
+if __name__ == "__main__":
+    sys.exit(_run.suite("swept_peers", run, draw, __doc__.splitlines()[0], options=OPTIONS))

@@ -140,15 +140,6 @@ def test_unknown_names_never_share_a_colour_in_a_figure():
     assert [style.style(n, again) for n in names] == [style.style(n, used) for n in names]
 
 
-def test_peers_figure(tmp_path, drawn):
-    from benchmarks import peers
-
-    peers.plot(_stored("peers"), str(tmp_path))
-    (figure,) = drawn
-    _check(figure)
-    assert len(_series(figure)) >= 12
-
-
 def test_size_scaling_figure(tmp_path, drawn):
     scaling = _benchmark("size_scaling")
     rows = _stored("size_scaling")
