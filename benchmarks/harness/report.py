@@ -67,7 +67,14 @@ def _machine() -> str:
     cpu, memory = platform.processor() or platform.machine(), "memory unknown"
     try:
         with open("/proc/cpuinfo") as info:
-            cpu = next(line.split(":", 1)[1].strip() for line in info if "model name" in line)
+            fields = {}
+            for line in info:
+                key, _, value = line.partition(":")
+                fields.setdefault(key.strip(), value.strip())
+        cpu = fields.get("model name", cpu)
+        # "AMD EPYC" alone has named machines whose speeds differed 3x.
+        if "cpu family" in fields:
+            cpu += f" (family {fields['cpu family']}, model {fields.get('model', '?')})"
         with open("/proc/meminfo") as info:
             kib = int(next(line.split()[1] for line in info if line.startswith("MemTotal")))
             memory = f"{kib / 2**20:.0f} GiB"
