@@ -6,7 +6,7 @@ run or timed); ``pyplot.close`` and ``Figure.savefig`` are caught so the figures
 examined after drawing.
 """
 
-import csv
+import importlib
 import importlib.util
 import pathlib
 
@@ -19,7 +19,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib.colors import to_hex  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
-from benchmarks.harness import style  # noqa: E402
+from benchmarks.harness import report, style  # noqa: E402
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 RESULTS = ROOT / "benchmarks" / "results"
@@ -116,15 +116,18 @@ def test_the_table_gives_each_series_its_own_look():
     assert not own & {colour for colour, _ in style.PEERS.values()}
 
 
-def test_every_stored_series_is_in_the_table():
-    for path in sorted(RESULTS.glob("**/*.csv")):
-        with open(path, newline="") as stream:
-            rows = list(csv.DictReader(stream))
-        for row in rows:
-            if "method" in row:
-                assert style.canonical(row["method"]) in style.STYLES, (path.name, row["method"])
-            if "dtype" in row and "tie" in row:
-                assert f"{row['dtype']} {row['tie']}" in style.STYLES
+@pytest.mark.parametrize("path", report.stored(), ids=lambda p: str(p.relative_to(RESULTS)))
+def test_every_stored_figure_draws_each_method_in_its_one_look(path, drawn):
+    """Each stored record's figure, drawn again from its JSON: every labelled series is a
+    method or guide of the style table, in that table's colour, and no two share one."""
+    rec = report.load(path)
+    figure = importlib.import_module(f"benchmarks.{rec['suite']}").draw(rec, plt)
+    colours = _series(figure, style.canonical)
+    for name, (colour,) in colours.items():
+        assert name in style.STYLES, f"{path.name}: {name!r} is not in the style table"
+        assert colour == style.STYLES[name][0], f"{path.name}: {name!r} drawn in {colour}"
+    assert len({c for (c,) in colours.values()}) == len(colours)
+    plt.close(figure)
 
 
 def test_unknown_names_never_share_a_colour_in_a_figure():

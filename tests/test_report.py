@@ -33,7 +33,7 @@ def test_every_record_names_its_run(path):
     rec = report.load(path)
     assert rec["suite"] == path.stem and rec["suite"] in generator.SUITES
     assert all(rec[key] not in ("", None) for key in PROVENANCE if key not in ("pinned", "quick"))
-    assert rec["command"].split()[-3:-1] != ["--out", "/tmp"]  # rerunnable from the repo root
+    assert "/tmp" not in rec["command"], "a stored record's command writes where it is stored"
     assert f"benchmarks/{path.stem}.py" in rec["command"]
     assert rec["pinned"] == rec["command"].startswith("taskset")
     assert not rec["quick"], "a stored record is a full run"
