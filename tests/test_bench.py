@@ -265,45 +265,6 @@ def test_results_assembles_stored_sections(tmp_path):
         assert "`benchmarks/stability.py` is not in this checkout." in text
 
 
-def test_size_scaling_rows_slopes_and_figure(tmp_path, monkeypatch):
-    """One tiny rough die through the library's two programs (all_to_all over its pair
-    budget), then a sweep made up from its rows: the slopes, tables, CSV and figure."""
-    scaling = _benchmark_module("size_scaling")
-    monkeypatch.setattr(scaling, "PAIR_BUDGET", 1_000)
-    names = (scaling.LIBRARY, scaling.SEARCH, scaling.DENSE)
-    rows = scaling.run_scene(400, 40, repeats=2, slow_s=60, names=names)
-    by_method = {row["method"]: row for row in rows}
-    assert by_method[scaling.DENSE]["note"].startswith("not run: N*M too large")
-    for name in (scaling.LIBRARY, scaling.SEARCH):
-        row = by_method[name]
-        assert row["median_ms"] > 0 and row["runs"] == 2 and row["compile_s"] > 0
-        assert row["temp_mib"] > 0 and row["out_mib"] > 0  # XLA's account of the program
-        assert row["missed"] == row["false"] == row["wrong_segment"] == 0, row
-    assert "found again 0 times" in by_method[scaling.SEARCH]["note"]  # the state was reused
-
-    def grown(by_nodes, by_segments):  # the same rows at a larger size, time as size**0.75
-        factor = (by_nodes * by_segments) ** 0.75
-        return [
-            {
-                **row,
-                "nodes": row["nodes"] * by_nodes,
-                "segments": row["segments"] * by_segments,
-                "median_ms": row["median_ms"] and row["median_ms"] * factor,
-            }
-            for row in rows
-        ]
-
-    by_scene = {(400, 40): rows, (4_000, 40): grown(10, 1), (40_000, 40): grown(100, 1)}
-    by_scene[400, 400] = grown(1, 10)
-    sweeps = scaling.Sweeps((400, 4_000, 40_000), 40, (40, 400), 400)
-    text = scaling.report(by_scene, sweeps, names, str(tmp_path), quick=True, elapsed_s=1.0)
-    assert f"| {scaling.LIBRARY} | 0.75 | 0.75 | 0.75 | 0.75 | 3, 2 | 0.00 |" in text  # memory kept
-    assert f"| {scaling.DENSE} | — | — | — | — | 0, 0 | — |" in text
-    assert (tmp_path / "size_scaling.csv").exists()
-    if _run.pyplot(str(tmp_path)) is not None:
-        assert (tmp_path / "size_scaling.png").exists()
-
-
 @pytest.mark.x64
 def test_sizes_too_small_are_counted_as_missed_contacts():
     from benchmarks import time_vs_error
@@ -334,21 +295,3 @@ def test_paper_test1_rows():
     assert "0 rows differ" in rows[2]["note"]  # swept against the float64 brute force
     assert "0 rows differ" in rows[3]["note"]  # bucket_swept (sized), likewise
     assert "| all_to_all |" in paper_tests.averages(rows)
-
-
-def test_compile_ops_sorts_a_programs_kernels_by_kind():
-    """benchmarks/compile_ops.py's census: a reduction, a gather and a sort, each found."""
-    import jax
-    import jax.numpy as jnp
-
-    compile_ops = _benchmark_module("compile_ops")
-    x, index = np.linspace(0.0, 1.0, 64, dtype=np.float32), np.arange(64, dtype=np.int32)[::-1]
-
-    def program(x, index):
-        return jnp.max(x * 2.0), x[index] * 3.0, jnp.sort(x[:40])
-
-    text = jax.jit(program).lower(x, index).compile().as_text()
-    found, bodies = compile_ops.kernel_lines(text)
-    kinds = {compile_ops.kind_of(line, bodies) for line in found}
-    assert {"gather + elementwise", "sort"} <= kinds, kinds
-    assert kinds & {"reduction to a scalar", compile_ops.WINDOW}, kinds

@@ -173,20 +173,6 @@ def test_paper_tests_figures(tmp_path, drawn):
         assert len(_series(figure)) == 6  # four methods, the paper's two averages
 
 
-def test_size_scaling_figure(tmp_path, drawn):
-    scaling = _benchmark("size_scaling")
-    rows = _stored("size_scaling")
-    at_m, at_n = scaling.FULL.nodes_at, scaling.FULL.segments_at
-    against_n = sorted((r for r in rows if r["segments"] == at_m), key=lambda r: r["nodes"])
-    against_m = sorted((r for r in rows if r["nodes"] == at_n), key=lambda r: r["segments"])
-    scaling.plot(against_n, against_m, scaling.METHODS, str(tmp_path))
-    (figure,) = drawn
-    for axes in figure.axes:  # one legend per panel (its slopes), each checked in _check
-        assert axes.get_legend() is not None
-    # A panel's labels carry its slopes: one colour per method, whatever the slope.
-    _check(figure, name=lambda label: label.split(" (slope")[0])
-
-
 def test_stability_figures(tmp_path, drawn):
     stability = _benchmark("stability")
     for name, x_key, y_keys in (
