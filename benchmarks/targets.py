@@ -343,7 +343,10 @@ def _found(rows, skipped, repeats, partial=None) -> dict:
         f"float32; median of {repeats} interleaved rounds after 2 warm-up runs, compile apart."
     ]
     # numba compiles on its first scene only; later scenes' compile_s is about 0.
-    first = {r["method"]: r for r in reversed(rows) if r["method"] in (NUMBA, NUMBA2)}
+    first = {}
+    for row in rows:
+        if row["method"] in (NUMBA, NUMBA2):
+            first.setdefault(row["method"], row)
     if first:
         compiled = ", ".join(f"{r['compile_s']:.2f} s ({name})" for name, r in first.items())
         notes.append(f"The numba grid compiles once per dtype and thread count: {compiled}.")
