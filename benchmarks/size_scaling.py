@@ -12,7 +12,7 @@ of it); every slope uses the counts the scenes have. On each scene, in one
 process, each method is compiled, its first answer checked, then all are
 timed round-robin (``benchmarks.harness._run.run_methods``, as ``peers.py``:
 median and 10th-90th percentile, every call ended by ``block_until_ready``;
-20 rounds up to 10^5 slaves, 5 above):
+20 rounds up to 10^5 slaves, 5 above; ``--repeats`` for all):
 
 - ``bucket_sort (sized)``: the bucket sort with its ``Sizes`` measured once
   outside the timer (``jaxcontact._pipeline.sizes.measure``) and its whole search,
@@ -55,13 +55,18 @@ What is measured, and why:
   equally near as the reference's, not errors.
 
 Nothing is capped: the full run takes 4 to 7 minutes on this project's 2
-cores, depending on what else runs (its own time is in the section's first
-line). Unpinned, a method's time depends on
-whether XLA gets the second core, which other load on a 2-core machine
-decides; run it pinned too (``python benchmarks/results.py --pinned
---sections size_scaling``) for slopes that show the algorithm.
+cores, depending on what else runs (its own time is in the record's notes).
+Unpinned, a method's time depends on whether XLA gets the second core, which
+other load on a 2-core machine decides; run it pinned too for slopes that
+show the algorithm.
 
-    python benchmarks/size_scaling.py --out benchmarks/results   # size_scaling.{md,csv,png}
+The record's tables: each method's slopes, then per scene each method's
+median time, XLA memory (temporaries + outputs; against N), compile time and
+answer; every row's full detail is in its ``data``. The figure: time against
+N, time against M and memory against N, log-log.
+
+    python benchmarks/size_scaling.py
+    taskset -c 0 python benchmarks/size_scaling.py --out benchmarks/results/pinned
     python benchmarks/size_scaling.py --quick --out /tmp/scaling  # N <= 10^4: a smoke test
 """
 
@@ -78,7 +83,7 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))  # the repo
 import jax
 import numpy as np
 
-from benchmarks.harness import _run, answers
+from benchmarks.harness import _run, answers, report
 from benchmarks.harness.internals import measure, measure_contacts
 from benchmarks.peer_codes import baselines
 from jaxcontact import Search, all_to_all
@@ -169,10 +174,12 @@ def run_scene(num_nodes, num_segments, repeats, slow_s, names=METHODS) -> list[d
         fields = _run.reference_fields(result, x, start, end, reference)
         state = result[-1]
         if hasattr(state, "rebuilds"):  # the Search step's state: were the candidates kept?
-            fields["note"] += f"; candidates found again {int(state.rebuilds)} times"
+            fields["rebuilds"] = int(state.rebuilds)
+            if fields["rebuilds"]:
+                fields["note"] += f"; candidates found again {fields['rebuilds']} times"
         return fields
 
-    return _run.run_methods(
+    rows = _run.run_methods(
         methods(scene, names),
         check,
         repeats=repeats,
@@ -183,6 +190,18 @@ def run_scene(num_nodes, num_segments, repeats, slow_s, names=METHODS) -> list[d
         segments=len(start),
         dtype=str(x.dtype),
     )
+    return [{**clean(row), "scene_key": [num_nodes, num_segments]} for row in rows]
+
+
+# ``_run``'s row fields that it formats as text, numbers in a record.
+_NUMBERS = ("ratio", "max_gap_error", "wrong_by")
+
+
+def clean(row: dict) -> dict:
+    """A ``_run`` row as JSON scalars: empty fields (not run, no XLA program) None, the
+    fields ``_run`` formats as text numbers again."""
+    row = {key: None if value == "" else value for key, value in row.items()}
+    return {**row, **{key: float(row[key]) for key in _NUMBERS if row.get(key) is not None}}
 
 
 def slope(sizes, times) -> float | None:
@@ -199,12 +218,12 @@ def slope(sizes, times) -> float | None:
 
 def time_ms(row) -> float | None:
     """A row's median time in ms; None where the method was not run."""
-    return None if row["median_ms"] == "" else row["median_ms"]
+    return row["median_ms"]
 
 
 def memory_mib(row) -> float | None:
     """A row's XLA temporaries + outputs in MiB; None where there is no XLA program."""
-    return None if row["temp_mib"] == "" else row["temp_mib"] + row["out_mib"]
+    return None if row["temp_mib"] is None else row["temp_mib"] + row["out_mib"]
 
 
 def points(rows, method, axis: str, value=time_ms) -> tuple[list, list]:
@@ -223,78 +242,176 @@ def slopes(rows, method, axis: str, value=time_ms) -> tuple[float | None, float 
     return slope(sizes, values), last
 
 
-def _fixed(value: float | None) -> str:
-    return "—" if value is None else f"{round(value, 2) + 0.0:.2f}"  # + 0.0: no "-0.00"
+def sweep_rows(rows, sweeps: Sweeps) -> tuple[list, list]:
+    """``(against N, against M)``: ``rows`` of each sweep's scenes, in the sweep's order."""
+    order = {tuple(key): at for at, key in enumerate(sweeps.scenes())}
+    rows = sorted(rows, key=lambda r: order[tuple(r["scene_key"])])
+    against_n = {tuple(key) for key in sweeps.against_nodes()}
+    against_m = {tuple(key) for key in sweeps.against_segments()}
+    return (
+        [r for r in rows if tuple(r["scene_key"]) in against_n],
+        [r for r in rows if tuple(r["scene_key"]) in against_m],
+    )
 
 
-def slope_table(against_n, against_m, names) -> list[str]:
+def slope_table(against_n, against_m, names, sweeps: Sweeps) -> dict:
     """One row per method: its time's slopes in N and in M, over all points and the last
-    decade, and its memory's slope in N over the last decade."""
-    lines = [
-        "| method | time in N: all points | last decade | time in M: all points "
-        "| last decade | points (N, M) | memory in N: last decade |",
-        "|---|---:|---:|---:|---:|---:|---:|",
-    ]
+    decade, the points each used, and its memory's slope in N over the last decade."""
+    rows = []
     for name in names:
         in_n, in_m = slopes(against_n, name, "nodes"), slopes(against_m, name, "segments")
-        count = f"{len(points(against_n, name, 'nodes')[0])}, "
-        count += f"{len(points(against_m, name, 'segments')[0])}"
-        cells = " | ".join(_fixed(value) for value in (*in_n, *in_m))
-        held = _fixed(slopes(against_n, name, "nodes", memory_mib)[1])
-        lines.append(f"| {name} | {cells} | {count} | {held} |")
-    return lines
+        count_n = len(points(against_n, name, "nodes")[0])
+        count_m = len(points(against_m, name, "segments")[0])
+        held = slopes(against_n, name, "nodes", memory_mib)[1]
+        rows.append([name, *in_n, *in_m, count_n, count_m, held])
+    columns = [
+        "method",
+        "time in N: all points",
+        "last decade",
+        "time in M: all points",
+        "last decade",
+        "points in N",
+        "points in M",
+        "memory in N: last decade",
+    ]
+    note = (
+        f"Least-squares slope of log(median time) against log N (M = {sweeps.nodes_at:,}) "
+        f"and against log M (N = {sweeps.segments_at:,}), over every point run and over the "
+        "last decade of each sweep (the points within a factor 10 of its largest); and of "
+        "log(XLA temporaries + outputs) against log N over its last decade."
+    )
+    return report.table(columns, rows, title="Slopes", note=note)
 
 
-def _memory(entry) -> str:
-    if memory_mib(entry) is None:
-        return "—"
-    return f"{memory_mib(entry):.3g} ({entry['temp_mib']:.3g} + {entry['out_mib']:.3g})"
+def scene_table(rows, names, value, title, note=None) -> dict:
+    """One row per scene (N, M), one column per method, each cell ``value(row)``."""
+    by_scene = {}
+    for row in rows:
+        by_scene.setdefault(tuple(row["scene_key"]), {})[row["method"]] = row
+    cells = []
+    for mine in by_scene.values():
+        first = next(iter(mine.values()))
+        cells.append(
+            [first["nodes"], first["segments"]]
+            + [value(mine[name]) if name in mine else None for name in names]
+        )
+    return report.table(["N", "M", *names], cells, title=title, note=note)
 
 
-def _compile(entry) -> str:
-    if entry["compile_s"] == "":
-        return "—"
-    # numba compiles once per dtype, not per shape: the target is about XLA's programs.
-    over = entry["method"] != NUMBA and entry["compile_s"] > TARGET_COMPILE_S
-    over = f" **> {TARGET_COMPILE_S:g} s**" if over else ""
-    return f"{entry['compile_s']:.2f}{over}"
+def answer(row) -> str:
+    """A row's answer against the float64 reference, in words (``answers.describe``)."""
+    return "not run" if row["median_ms"] is None else row["note"]
 
 
-def _median(entry) -> str:
-    return "not run" if entry["median_ms"] == "" else f"{entry['median_ms']:.3g}"
+def tables(rows, sweeps: Sweeps, names) -> list[dict]:
+    against_n, against_m = sweep_rows(rows, sweeps)
+    return [
+        slope_table(against_n, against_m, names, sweeps),
+        scene_table(
+            rows,
+            names,
+            time_ms,
+            "Median time (ms)",
+            f"A dash: not run ({DENSE} where N x M is over {PAIR_BUDGET:.0e} pairs).",
+        ),
+        scene_table(
+            against_n,
+            names,
+            memory_mib,
+            f"Memory against N (MiB; M = {sweeps.nodes_at:,})",
+            "XLA's account of each compiled program (compiled.memory_analysis()): "
+            "temporaries + outputs, what one call allocates beyond its arguments. The numba "
+            "grid is not an XLA program.",
+        ),
+        scene_table(
+            rows,
+            names,
+            lambda row: row["compile_s"],
+            "Compile time per shape (s)",
+            f"Trace, lower and compile (issue 15's target: at most {TARGET_COMPILE_S:g} s). "
+            "numba compiles once per dtype, in the first scene.",
+        ),
+        scene_table(
+            rows,
+            names,
+            answer,
+            "Answers against all_to_all in float64",
+            "ties: a segment exactly as near as the reference's, not an error.",
+        ),
+    ]
 
 
-def scene_table(scene_rows, names, value) -> list[str]:
-    """One row per scene (``N``, ``M``), one column per method, each cell ``value(row)``."""
-    lines = ["| N | M | " + " | ".join(names) + " |", "|---:|---:|" + "---:|" * len(names)]
-    for rows in scene_rows:
-        by_method = {r["method"]: r for r in rows}
-        cells = [value(by_method[name]) if name in by_method else "—" for name in names]
-        lines.append(f"| {rows[0]['nodes']:,} | {rows[0]['segments']:,} | {' | '.join(cells)} |")
-    return lines
+def run(args) -> dict:
+    """Runs both sweeps; the record's title, tables, figure data and notes."""
+    began = time.perf_counter()
+    sweeps = QUICK if args.quick else FULL
+    slow_s = args.slow or (3.0 if args.quick else 30.0)
+    rows, scenes = [], sweeps.scenes()
+    for done, (num_nodes, num_segments) in enumerate(_run.progress(scenes, "size scaling"), 1):
+        count = args.repeats or (5 if args.quick else (20 if num_nodes <= 10**5 else 5))
+        rows += run_scene(num_nodes, num_segments, count, slow_s)
+        if done < len(scenes):
+            # Every scene's rows kept as soon as they are measured, so a run stopped part way
+            # (a lent GPU's time ran out on one: 11 of 13 scenes in 330 s) leaves them behind.
+            _keep_partial(args, found(rows, sweeps, f"Partial: {done} of {len(scenes)} scenes."))
+    minutes = (time.perf_counter() - began) / 60
+    return found(rows, sweeps, f"The whole run took {minutes:.1f} min.")
 
 
-def plot(against_n, against_m, names, out) -> list[str]:
+def found(rows, sweeps: Sweeps, note: str) -> dict:
+    """``run``'s answer for ``rows`` (of ``sweeps``' scenes, or the first of them)."""
+    kept = all(row.get("rebuilds") in (None, 0) for row in rows)
+    notes = [
+        f"Rough die, float32; medians of interleaved runs; nothing capped. {note}",
+    ]
+    if kept:
+        notes.append("Every Search step kept its candidates (found again 0 times).")
+    data = {"rows": rows, "sweeps": sweeps._asdict(), "methods": list(METHODS)}
+    return {
+        "title": "Size scaling: time, memory and compile time against N and M (rough die)",
+        "tables": tables(rows, sweeps, METHODS),
+        "data": data,
+        "notes": notes,
+    }
+
+
+def _keep_partial(args, partial) -> None:
+    """The record so far, the JSON alone; the finished run writes over it, figure included."""
+    rec = report.record(
+        "size_scaling",
+        partial["title"],
+        partial["tables"],
+        data=partial["data"],
+        notes=partial["notes"],
+        quick=args.quick,
+    )
+    report.save(rec, args.out)
+
+
+def draw(record, plt):
     """Time against N, time against M and memory against N, log-log, one line per method
-    (one look per method: ``benchmarks.harness.style``), each panel's legend below it."""
-    plt = _run.pyplot(out)
-    if plt is None:
-        return []
+    (one look per method: ``benchmarks.harness.style``), slope-1 guides; one legend."""
+    from matplotlib.ticker import NullFormatter
+
     from benchmarks.harness import style
 
-    figure, (by_n, by_m, memory) = plt.subplots(1, 3, figsize=(15, 6.2))
+    data = record["data"]
+    sweeps = Sweeps(
+        **{key: tuple(v) if isinstance(v, list) else v for key, v in data["sweeps"].items()}
+    )
+    against_n, against_m = sweep_rows(data["rows"], sweeps)
+    figure, (by_n, by_m, memory) = plt.subplots(1, 3, figsize=(15, 4.8))
     used = {}
-    for name in names:
+    for name in data["methods"]:
         looks = style.style(name, used)
         for axes, rows, axis in ((by_n, against_n, "nodes"), (by_m, against_m, "segments")):
             sizes, times = points(rows, name, axis)
             if sizes:
-                fitted = _fixed(slope(sizes, times))
-                axes.plot(sizes, times, **looks, label=f"{name} (slope {fitted})")
+                axes.plot(sizes, times, **looks, label=name)
         sizes, held = points(against_n, name, "nodes", memory_mib)
         if sizes:
             memory.plot(sizes, held, **looks, label=name)
-    at_m, at_n = against_n[0]["segments"], against_m[0]["nodes"]
+    at_m, at_n = sweeps.nodes_at, sweeps.segments_at
     by_n.set(xlabel="slave nodes N", ylabel="median (ms)", title=f"time against N, M = {at_m:,}")
     by_m.set(xlabel="segments M", ylabel="median (ms)", title=f"time against M, N = {at_n:,}")
     memory.set(
@@ -314,76 +431,13 @@ def plot(against_n, against_m, names, out) -> list[str]:
         axes.set_ylim(bottom, top)
     for axes in (by_n, by_m, memory):
         axes.grid(True, which="both", alpha=0.3)
-        style.legend_outside(axes, "below", panels=[axes])
-    return [_run.save_figure(figure, out, "size_scaling")]
-
-
-def report(by_scene, sweeps, names, out, quick, elapsed_s) -> str:
-    """The section's markdown (and its figure in ``out``), from ``(N, M) -> rows``."""
-    against_n = [row for key in sweeps.against_nodes() for row in by_scene[key]]
-    against_m = [row for key in sweeps.against_segments() for row in by_scene[key]]
-    rows = [row for scene_rows in by_scene.values() for row in scene_rows]
-    pictures = plot(against_n, against_m, names, out)
-    at_m, at_n = sweeps.nodes_at, sweeps.segments_at
-    columns = ("nodes", "segments", "method", "compile_s", "temp_mib", "out_mib", "args_mib")
-    more = ("median_ms", "p10_ms", "p90_ms", "runs", "ratio", "max_gap_error", "note")
-    body = [
-        "Slope of log(median time) against log N (M = "
-        f"{at_m:,}) and against log M (N = {at_n:,}), least squares over every point run and "
-        "over the last decade of each sweep (points within a factor 10 of its largest); and "
-        "of log(XLA temporaries + outputs) against log N over its last decade:",
-        "",
-        *slope_table(against_n, against_m, names),
-        "",
-        "Median time (ms):",
-        "",
-        *scene_table([by_scene[key] for key in by_scene], names, _median),
-        "",
-        f"Memory against N (M = {at_m:,}), from `compiled.memory_analysis()`: XLA "
-        "temporaries + outputs in MiB, and the two apart in brackets:",
-        "",
-        *scene_table([by_scene[key] for key in sweeps.against_nodes()], names, _memory),
-        "",
-        f"Compile time per shape (s; trace, lower and compile; issue 15's target: at most "
-        f"{TARGET_COMPILE_S:g} s). numba compiles once per dtype, in the first scene:",
-        "",
-        *scene_table([by_scene[key] for key in by_scene], names, _compile),
-        "",
-        "Every row, checked against all_to_all in float64:",
-        "",
-        _run.markdown(rows, (*columns, *more)),
-    ]
-    note = (
-        f"float32; medians of interleaved runs; ratio = median / {LIBRARY}'s; XLA memory in "
-        f"MiB; nothing capped; the whole run took {elapsed_s / 60:.1f} min."
-    )
-    text = _run.section("size_scaling", "Size scaling", quick, note, body, pictures)
-    _run.write(out, "size_scaling", rows, text)
-    return text
-
-
-def run(quick: bool, out: str, repeats: int | None = None, slow_s: float | None = None) -> str:
-    """Runs both sweeps, writes CSV, markdown and PNG into ``out``; returns the markdown."""
-    began = time.perf_counter()
-    sweeps = QUICK if quick else FULL
-    slow_s = slow_s or (3.0 if quick else 30.0)
-    by_scene = {}
-    scenes = sweeps.scenes()
-    for num_nodes, num_segments in _run.progress(scenes, "size scaling"):
-        count = repeats or (5 if quick else (20 if num_nodes <= 10**5 else 5))
-        by_scene[num_nodes, num_segments] = run_scene(num_nodes, num_segments, count, slow_s)
-        # Every scene's rows kept as soon as they are measured, so a run stopped part way
-        # (a lent GPU's time ran out on one: 11 of 13 scenes in 330 s) leaves them behind.
-        done = [row for rows in by_scene.values() for row in rows]
-        _run.write(
-            out, "size_scaling", done, f"Partial: {len(by_scene)} of {len(scenes)} scenes.\n"
-        )
-    return report(by_scene, sweeps, METHODS, out, quick, time.perf_counter() - began)
-
-
-def main(argv=None) -> int:
-    return _run.main(run, __doc__.splitlines()[0], argv, slow=True)
+        style.plain_log_labels(axes.yaxis)
+        style.plain_log_labels(axes.xaxis)
+        axes.xaxis.set_minor_formatter(NullFormatter())  # sizes: decades are enough
+    style.legend_outside(memory, "right")
+    return figure
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    options = ((("--slow",), {"type": float, "default": None, "help": "s: time slower ones once"}),)
+    sys.exit(_run.suite("size_scaling", run, draw, __doc__.splitlines()[0], options=options))

@@ -1,60 +1,55 @@
 """Issue 25's targets 1 and 2, scene by scene: ``Search.closest`` beside the numba grid.
 
-On every reference scene (float32, ``docs/scenes.md``) one process times,
-round-robin (``benchmarks.harness.timing.time_interleaved``: compiled ahead,
-its compile time apart, two warm-up runs, then ``--repeats`` rounds, every
-call ended by ``block_until_ready``; median and 10th-90th percentile):
-
-- ``Search.closest`` as a simulation step calls it, jitted, its state
-  allocated on the scene (``Search(radius).allocate``), in both result
-  forms, the dense ``Contact`` and the compact ``ContactList``:
-  - **whole search** (``skin=0``): every call runs the broad and the narrow
-    phase with the allocated sizes. This is the like-for-like comparison
-    with the numba grid, which bins and searches at every call;
-  - **candidates reused** (``skin = radius / 2``, every call on the
-    allocation's positions): the skin check, then the narrow phase on the
-    candidates kept since ``allocate``. It is a simulation's step while
-    nothing has moved a skin.
-- the hand-written numba grid (``benchmarks.peer_codes.numba_grid``) on one
-  thread, and on two unless the process is pinned to one core. It is built
-  and searched on every call.
-
-Before anything runs, glibc's allocator is set to keep freed pages
-(``_run.reuse_pages``): with its start values each call's large buffers are
-mapped afresh, at up to 4x the call's time for the dense form at 10^6 nodes
-and 5x for the numba grid on the chip's outline at 10^5, depending on what
-ran before in the process (``benchmarks/archive/malloc.py``). Runs before 0.7.4
-did not set it.
-
-The ratio column is the numba grid's (one thread) median over each form's:
-1 or more meets target 1 (at least as fast). The compile column is the
-trace, lowering and XLA compile of the jitted step (target 2: at most 1 s),
-and ``kernels`` the thunks XLA's CPU runtime runs per call
-(``benchmarks/stages.py``'s count).
-
-Checks: every ``Search`` answer is compared with the whole-search dense
-form's (``segment`` and ``found``, row for row, the compact form through
-``to_contact``): "equal", or the rows that differ and how close their gaps
-are (on the rough die at 10^6 x 10^5 the compact form picked the other
-segment at a vertex for 1 slave, the two gaps equal to
-2e-9 in float32: the two programs round the pair distance in differently
-fused loops). The numba grid's answer equals it on ``found`` and
-``segment`` but for exact vertex ties (its rule is the lower index). On the
-self-contact scene (``scenes.curling_chip``: every node of the chip's
-outline is a slave, ``Pairs(slave_node, self_contact=True)``) the numba grid has no
-pair rule: it answers the plain query over the same nodes and segments,
-where every node finds its own segments, so its time is a lower bound for a
-grid that applied the rule, and its answer is not compared.
-
-    python benchmarks/targets.py --out benchmarks/results                  # both cores
+    python benchmarks/targets.py                                            # both cores
     taskset -c 0 python benchmarks/targets.py --out benchmarks/results/pinned
-    python benchmarks/targets.py --quick                                   # a smoke test
+    python benchmarks/targets.py --quick --out /tmp/targets                 # a smoke test
+
+On every reference scene (float32, ``docs/scenes.md``; ``jax_enable_x64`` off, as a float32
+simulation runs) one process times, round-robin (``jaxcontact._timing.time_interleaved``:
+compiled ahead, its compile time apart, two warm-up runs, then ``--repeats`` rounds, 40 by
+default, every call ended by ``block_until_ready``; median and 10th-90th percentile):
+
+- ``Search.closest`` as a simulation step calls it, jitted, its state allocated on the scene
+  (``Search(radius).allocate``), in both result forms, the dense ``Contact`` and the compact
+  ``ContactList``:
+  - **whole search** (``skin=0``): every call runs the broad and the narrow phase with the
+    allocated sizes. This is the like-for-like comparison with the numba grid, which bins
+    and searches at every call;
+  - **reused state** (``skin = radius / 2``, every call on the allocation's positions): the
+    skin check, then the narrow phase on the candidates kept since ``allocate``. It is a
+    simulation's step while nothing has moved a skin.
+- the hand-written numba grid (``benchmarks.peer_codes.numba_grid``) on one thread, and on
+  two (``prange``) unless the process is pinned to one core. It is built and searched on
+  every call; it compiles once per dtype (a note gives the time).
+
+Before anything runs, glibc's allocator is set to keep freed pages (``_run.reuse_pages``):
+with its start values each call's large buffers are mapped afresh, at up to 4x the call's
+time for the dense form at 10^6 nodes and 5x for the numba grid on the chip's outline at
+10^5, depending on what ran before in the process (``benchmarks/archive/malloc.py``).
+
+The first table: each method's time, the numba grid's (one thread) median over it (1 or more
+meets target 1: at least as fast), and its answer's check. The second, each ``Search`` step's
+compiled program (``benchmarks.harness.program``): the trace, lowering and XLA compile
+(target 2: at most 1 s), the kernels XLA's CPU runtime runs per call, the largest trip count
+of its sequential (``while``) loops ("unknown" where XLA does not know it; a dash: no loop),
+and the bytes XLA's cost analysis says one call accesses (a loop body once) beside the least
+any program moves (its inputs' and outputs' bytes).
+
+Checks: every ``Search`` answer is compared with the whole-search dense form's (``segment``
+and ``found``, row for row, the compact form through ``to_contact``): "equal", or the rows
+that differ and how close their gaps are (on the rough die at 10^6 x 10^5 the compact form
+picked the other segment at a vertex for 1 slave, the two gaps equal to 2e-9 in float32: the
+two programs round the pair distance in differently fused loops). The numba grid's answer
+equals it on ``found`` and ``segment`` but for exact vertex ties (its rule is the lower
+index). On the self-contact scene (``scenes.curling_chip``: every node of the chip's outline
+is a slave, ``Pairs(slave_node, self_contact=True)``) the numba grid has no pair rule: it
+answers the plain query over the same nodes and segments, where every node finds its own
+segments, so its time is a lower bound for a grid that applied the rule, and its answer is
+not compared.
 """
 
 from __future__ import annotations
 
-import argparse
-import os
 import pathlib
 import sys
 
@@ -63,13 +58,11 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))  # the repo
 import jax
 import numpy as np
 
-from benchmarks.harness import _run
-from benchmarks.harness.timing import time_interleaved
+from benchmarks.harness import _run, program, report
+from benchmarks.harness.timing import compiled_call, time_interleaved
+from benchmarks.peer_codes import baselines
 from jaxcontact import Pairs, Search
 from jaxcontact.scenes import curling_chip, cutting_scene, rough_die_scene
-
-sys.path.insert(0, str(pathlib.Path(__file__).parent))
-from stages import kernels  # noqa: E402
 
 FULL = (
     ("cutting, tool in", 10_000, 18.0),
@@ -89,8 +82,26 @@ QUICK = (
 )
 # FULL without the rough die at 10^6 x 10^5: benchmarks/archive/threads.py's and malloc.py's scenes.
 WITHOUT_LARGEST_DIE = tuple(s for s in FULL if not (s[0] == "rough die" and s[1] > 10**5))
+WHOLE = "Search.closest (whole search)"
+WHOLE_COMPACT = "Search.closest (compact, whole search)"
+REUSED = "Search.closest (reused state)"
+REUSED_COMPACT = "Search.closest (compact, reused state)"
+SEARCHES = (WHOLE, WHOLE_COMPACT, REUSED, REUSED_COMPACT)
 NUMBA = "numba grid (1 thread)"
-NUMBA2 = "numba grid (2 threads)"
+NUMBA2 = "numba grid (prange, 2 threads)"
+PEERS = (NUMBA, NUMBA2)
+TARGET_COMPILE_S = 1.0  # issue 25's target 2
+TIME_COLUMNS = ("scene", "method", "median ms", "p10 ms", "p90 ms", "numba / this", "check")
+PROGRAM_COLUMNS = (
+    "scene",
+    "method",
+    "compile s",
+    "kernels",
+    "loop trips",
+    "accessed MiB",
+    "in + out MiB",
+    "accessed / (in + out)",
+)
 
 
 def build(kind: str, size: int, parameter):
@@ -105,6 +116,11 @@ def build(kind: str, size: int, parameter):
     return scene.x, scene.surface, scene.radius, {}
 
 
+def label(kind: str, size: int, parameter) -> str:
+    """A scene's name in the tables: its kind, nodes, and a rough die's segments."""
+    return f"{kind}, {size:,} nodes" + (f" x {parameter:,}" if kind == "rough die" else "")
+
+
 def step(search: Search, x, surface, pair):
     """``(jitted step, args)``: ``search.closest`` on its own allocation at ``x``;
     ``pair`` (the pair rule's keywords, or {}) goes in as a traced argument."""
@@ -116,15 +132,25 @@ def step(search: Search, x, surface, pair):
     return jax.jit(closest), (state, x, surface, pair)
 
 
-def whole_search_steps(x, surface, radius, pair) -> dict:
-    """``{"dense" | "compact": (jitted step, args)}``: the whole search (``skin=0``)
-    in both result forms (``step``)."""
-    return {
-        "compact" if compact else "dense": step(
-            Search(radius=radius, compact=compact), x, surface, pair
-        )
-        for compact in (False, True)
+def search_steps(x, surface, radius, pair) -> dict:
+    """``{name: (jitted step, args)}`` of the four ``SEARCHES``."""
+    forms = {
+        WHOLE: (0.0, False),
+        WHOLE_COMPACT: (0.0, True),
+        REUSED: (radius / 2, False),
+        REUSED_COMPACT: (radius / 2, True),
     }
+    return {
+        name: step(Search(radius=radius, skin=skin, compact=compact), x, surface, pair)
+        for name, (skin, compact) in forms.items()
+    }
+
+
+def whole_search_steps(x, surface, radius, pair) -> dict:
+    """``{"dense" | "compact": (jitted step, args)}``: the whole search (``skin=0``) in both
+    result forms (``benchmarks/archive/threads.py`` and ``malloc.py`` time them)."""
+    steps = search_steps(x, surface, radius, pair)
+    return {"dense": steps[WHOLE], "compact": steps[WHOLE_COMPACT]}
 
 
 def numba_closest(x, surface, radius, threads: int = 1):
@@ -141,7 +167,7 @@ def _rows(result, num_rows: int):
     return np.asarray(result.segment), np.asarray(result.found), np.asarray(result.gap)
 
 
-def _search_check(rows, reference) -> str:
+def search_check(rows, reference) -> str:
     """A ``Search`` form's rows against the whole-search dense form's: "equal", or
     how many found slaves differ and by how much their gaps do (float32 picks
     either of two segments whose distances agree to rounding, at a vertex)."""
@@ -157,68 +183,7 @@ def _search_check(rows, reference) -> str:
     )
 
 
-def run_scene(kind: str, size: int, parameter, repeats: int, threads: int) -> list[dict]:
-    x, surface, radius, pair = build(kind, size, parameter)
-    calls = {}
-    for skin, how in ((0.0, "whole search"), (radius / 2, "candidates reused")):
-        for compact in (False, True):
-            search = Search(radius=radius, skin=skin, compact=compact)
-            form = "compact" if compact else "dense"
-            calls[f"Search.closest, {how}, {form}"] = step(search, x, surface, pair)
-    for name, count in ((NUMBA, 1), (NUMBA2, 2)):
-        if count > threads:
-            continue
-        peer = numba_closest(x, surface, radius, count)
-        if isinstance(peer, str):
-            print(f"{name}: {peer}", file=sys.stderr)
-            continue
-        calls[name] = peer
-    # Timed first: its compile time is then a real compile, not the jit cache's.
-    timings = time_interleaved(calls, repeats=repeats)
-    reference = None
-    checks = {}
-    for name, (fn, args) in calls.items():
-        if name.startswith("Search"):
-            rows = _rows(fn(*args), len(x))
-            if reference is None:
-                reference = rows
-            checks[name] = _search_check(rows, reference)
-        elif pair:
-            checks[name] = "plain query (no pair rule)"
-        else:
-            checks[name] = _numba_check(fn(*args), reference)
-    best = min(
-        (t.median_s for n, t in timings.items() if n.startswith("Search")),
-        default=float("nan"),
-    )
-    numba = timings.get(NUMBA)
-    label = f"{kind}, {size:,} nodes" + (f" x {parameter:,}" if kind == "rough die" else "")
-    rows = []
-    for name, timing in timings.items():
-        fn, args = calls[name]
-        rows.append(
-            {
-                "scene": label,
-                "method": name,
-                "median_ms": timing.median_s * 1e3,
-                "p10_ms": timing.p10_s * 1e3,
-                "p90_ms": timing.p90_s * 1e3,
-                "compile_s": timing.compile_s,
-                "kernels": kernels(fn, args) if name.startswith("Search") else "",
-                "numba_over_this": numba.median_s / timing.median_s if numba else float("nan"),
-                "check": checks[name],
-            }
-        )
-    print(
-        f"{label}: fastest Search form {best * 1e3:.3f} ms"
-        + (f", numba grid {numba.median_s * 1e3:.3f} ms" if numba else ""),
-        file=sys.stderr,
-        flush=True,
-    )
-    return rows
-
-
-def _numba_check(got, reference) -> str:
+def numba_check(got, reference) -> str:
     """The numba grid's ``(segment, gap, found)`` against the whole-search dense form's rows."""
     segment, found = np.asarray(got[0]), np.asarray(got[2])
     missed = int(np.sum(reference[1] & ~found))
@@ -229,58 +194,243 @@ def _numba_check(got, reference) -> str:
     return f"missed {missed}, false {false}, other segment {other}"
 
 
-def table(rows: list[dict]) -> str:
-    lines = [
-        "| scene | method | median ms | p10-p90 ms | numba (1 thread) / this | compile s | kernels "
-        "| check |",
-        "|---|---|---:|---:|---:|---:|---:|---|",
-    ]
-    for row in rows:
-        ratio = row["numba_over_this"]
-        lines.append(
-            f"| {row['scene']} | {row['method']} | {row['median_ms']:.3f} | "
-            f"{row['p10_ms']:.3f}-{row['p90_ms']:.3f} | "
-            f"{'' if ratio != ratio else f'{ratio:.2f}'} | {row['compile_s']:.2f} | "
-            f"{row['kernels']} | {row['check']} |"
+def run_scene(kind: str, size: int, parameter, repeats: int, peers=None) -> dict:
+    """One scene: ``{"rows": [one dict per method], "skipped": {peer: why not run}}``; the
+    four ``SEARCHES`` and the ``peers`` (default ``PEERS``).
+
+    Each ``Search`` step is compiled here, once: that compile is timed (``compile_s``),
+    described (``program.describe``) and run, so no second compile meets JAX's caches.
+    """
+    x, surface, radius, pair = build(kind, size, parameter)
+    calls, compile_s, shapes, skipped = {}, {}, {}, {}
+    for name, (jitted, args) in search_steps(x, surface, radius, pair).items():
+        compiled, compile_s[name] = compiled_call(jitted, args)
+        shapes[name] = program.describe(compiled)
+        calls[name] = (compiled, args)
+    for name in PEERS if peers is None else peers:
+        # The peers of peers.py: not installed, or more threads than cores allowed, a note.
+        peer = baselines.unavailable(name) or baselines.PEERS[name][1](
+            np.asarray(x), *_run.endpoints(surface), radius
         )
-    return "\n".join(lines)
-
-
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--quick", action="store_true", help="three small scenes, 10 rounds")
-    parser.add_argument("--repeats", type=int, default=None)
-    parser.add_argument("--out", default=None, help="folder for targets.md")
-    args = parser.parse_args()
-    repeats = args.repeats or (10 if args.quick else 40)
-    threads = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else 1
-    scenes = QUICK if args.quick else FULL
-    # Both jaxcontact and the numba grid at their best: buffers on reused pages
-    # (benchmarks/archive/malloc.py), whatever ran before in this process.
-    _run.reuse_pages()
-    command = "python benchmarks/targets.py" + (" --quick" if args.quick else "")
-    header = (
-        f"`{command}`; {_run.machine()}; float32; median of {repeats} interleaved rounds "
-        "after 2 warm-up runs, compile apart."
-    )
+        if isinstance(peer, str):
+            skipped[name] = peer
+            continue
+        calls[name] = peer
+        compile_s[name] = peer[0].compile_s
+    timings = time_interleaved(calls, repeats=repeats)
+    reference = _rows(calls[WHOLE][0](*calls[WHOLE][1]), len(x))
+    numba = timings.get(NUMBA)
     rows = []
-    for done, (kind, size, parameter) in enumerate(scenes, 1):
-        rows += run_scene(kind, size, parameter, repeats, threads)
-        # Each scene's rows kept as they come (a lent GPU's time may run out).
-        if args.out and done < len(scenes):
-            partial = f"Partial: {done} of {len(scenes)} scenes."
-            write(args.out, "\n".join([header, "", partial, "", table(rows), ""]))
-    text = "\n".join([header, "", table(rows), ""])
-    print(text)
-    if args.out:
-        write(args.out, text)
+    for name, timing in timings.items():
+        fn, args = calls[name]
+        if name in shapes:
+            check = search_check(_rows(fn(*args), len(x)), reference)
+        elif pair:
+            check = "plain query (no pair rule)"
+        else:
+            check = numba_check(fn(*args), reference)
+        shape = shapes.get(name)
+        rows.append(
+            {
+                "scene": label(kind, size, parameter),
+                "method": name,
+                "median_ms": timing.median_s * 1e3,
+                "p10_ms": timing.p10_s * 1e3,
+                "p90_ms": timing.p90_s * 1e3,
+                "runs": timing.runs,
+                "numba_over_this": numba.median_s / timing.median_s if numba else None,
+                "compile_s": compile_s[name],
+                "check": check,
+                **(_program_fields(shape) if shape else {}),
+            }
+        )
+    fastest = min(timings[name].median_s for name in SEARCHES)
+    print(
+        f"{label(kind, size, parameter)}: fastest Search form {fastest * 1e3:.3f} ms"
+        + (f", numba grid {numba.median_s * 1e3:.3f} ms" if numba else ""),
+        file=sys.stderr,
+        flush=True,
+    )
+    return {"rows": rows, "skipped": skipped}
 
 
-def write(out: str, text: str) -> None:
-    path = pathlib.Path(out)
-    path.mkdir(parents=True, exist_ok=True)
-    (path / "targets.md").write_text(text)
+def _program_fields(shape: program.Shape) -> dict:
+    return {
+        "kernels": shape.kernels,
+        "kinds": shape.kinds,
+        "loops": list(shape.loops),
+        "loop_trips": program.largest_trip(shape.loops),
+        "bytes_accessed": shape.bytes_accessed,
+        "minimum_bytes": shape.minimum_bytes,
+    }
+
+
+def _mib(count) -> float | None:
+    return None if count is None else count / 2**20
+
+
+def tables(rows: list[dict]) -> list[dict]:
+    """The record's two tables: every method's time and check; each ``Search`` step's
+    compiled program."""
+    timed = [
+        [
+            row["scene"],
+            row["method"],
+            row["median_ms"],
+            row["p10_ms"],
+            row["p90_ms"],
+            row["numba_over_this"],
+            row["check"],
+        ]
+        for row in rows
+    ]
+    programs = [
+        [
+            row["scene"],
+            row["method"],
+            row["compile_s"],
+            row["kernels"],
+            row["loop_trips"],
+            _mib(row["bytes_accessed"]),
+            _mib(row["minimum_bytes"]),
+            None if row["bytes_accessed"] is None else row["bytes_accessed"] / row["minimum_bytes"],
+        ]
+        for row in rows
+        if row["method"] in SEARCHES
+    ]
+    return [
+        report.table(
+            TIME_COLUMNS,
+            timed,
+            title="Time per call (float32)",
+            note="numba / this: the numba grid's (1 thread) median over the row's; 1 or more "
+            "meets target 1. check: against the whole-search dense form's rows.",
+        ),
+        report.table(
+            PROGRAM_COLUMNS,
+            programs,
+            title="The compiled Search.closest steps",
+            note=f"compile s: trace, lowering and XLA compile (target 2: at most "
+            f"{TARGET_COMPILE_S:g} s). kernels: thunks run per call. loop trips: the largest "
+            "trip count of its while loops (unknown: XLA does not know it; a dash: no loop). "
+            "accessed: XLA's cost analysis of one call (a loop's body counted once); in + out: "
+            "its inputs' and outputs' bytes, the least any program moves.",
+        ),
+    ]
+
+
+def run(args) -> dict:
+    repeats = args.repeats or (10 if args.quick else 40)
+    scenes = QUICK if args.quick else FULL
+    x64 = jax.config.jax_enable_x64
+    # A float32 simulation runs with x64 off: indices and weak scalars 32-bit, its programs.
+    jax.config.update("jax_enable_x64", False)
+    rows, skipped = [], {}
+    try:
+        for done, scene in enumerate(scenes, 1):
+            found = run_scene(*scene, repeats)
+            rows += found["rows"]
+            skipped |= found["skipped"]
+            if done < len(scenes):
+                _keep_partial(args, _found(rows, skipped, repeats, f"{done} of {len(scenes)}"))
+    finally:
+        jax.config.update("jax_enable_x64", x64)
+    return _found(rows, skipped, repeats)
+
+
+def _found(rows, skipped, repeats, partial=None) -> dict:
+    notes = [
+        f"float32; median of {repeats} interleaved rounds after 2 warm-up runs, compile apart."
+    ]
+    # numba compiles on its first scene only; later scenes' compile_s is about 0.
+    first = {}
+    for row in rows:
+        if row["method"] in (NUMBA, NUMBA2):
+            first.setdefault(row["method"], row)
+    if first:
+        compiled = ", ".join(f"{r['compile_s']:.2f} s ({name})" for name, r in first.items())
+        notes.append(f"The numba grid compiles once per dtype and thread count: {compiled}.")
+    notes += [f"{name}: {why}." for name, why in skipped.items()]
+    if partial:
+        notes.insert(0, f"Partial: {partial} scenes.")
+    return {
+        "title": "Search.closest beside the numba grid, scene by scene (issue 25's targets)",
+        "tables": tables(rows),
+        "data": {"rows": rows, "target_compile_s": TARGET_COMPILE_S},
+        "notes": notes,
+    }
+
+
+def _keep_partial(args, found) -> None:
+    """Each scene's rows kept as they come, the JSON alone (a lent GPU's time may run out);
+    the finished run writes over it, figure included."""
+    rec = report.record(
+        "targets",
+        found["title"],
+        found["tables"],
+        data=found["data"],
+        notes=found["notes"],
+        quick=args.quick,
+    )
+    report.save(rec, args.out)
+
+
+def draw(record, plt):
+    """Three panels, one row per scene: each method's median (p10-p90 bars), each ``Search``
+    step's compile time (target 2 dotted), and its bytes accessed over its inputs' and
+    outputs' bytes."""
+    from matplotlib.ticker import LogLocator, NullFormatter
+
+    from benchmarks.harness import style
+
+    rows = record["data"]["rows"]
+    scenes = list(dict.fromkeys(r["scene"] for r in rows))
+    methods = list(dict.fromkeys(r["method"] for r in rows))
+    figure, (timed, compiled, moved) = plt.subplots(
+        1, 3, figsize=(14, 2.0 + 0.55 * len(scenes)), sharey=True
+    )
+    used, offset = {}, np.linspace(-0.3, 0.3, len(methods))
+    for shift, method in zip(offset, methods, strict=True):
+        looks = style.style(method, used)
+        mine = {r["scene"]: r for r in rows if r["method"] == method}
+        at = [scenes.index(s) + shift for s in mine]
+        median = [r["median_ms"] for r in mine.values()]
+        spread = [
+            [r["median_ms"] - r["p10_ms"] for r in mine.values()],
+            [r["p90_ms"] - r["median_ms"] for r in mine.values()],
+        ]
+        timed.errorbar(median, at, xerr=spread, **{**looks, "linestyle": "none"}, label=method)
+        if method in SEARCHES:
+            compile_s = [r["compile_s"] for r in mine.values()]
+            compiled.plot(compile_s, at, **{**looks, "linestyle": "none"})
+            ratio = [
+                r["bytes_accessed"] / r["minimum_bytes"] if r["bytes_accessed"] else np.nan
+                for r in mine.values()
+            ]
+            moved.plot(ratio, at, **{**looks, "linestyle": "none"})
+    compiled.axvline(record["data"]["target_compile_s"], color="#7f7f7f", linestyle=":")
+    timed.set(xscale="log", xlabel="median per call (ms)", title="time per call (bars: p10-p90)")
+    compiled.set(xlabel="compile (s)", title="Search steps: compile (dotted: target)")
+    compiled.set_xlim(left=0)
+    moved.set(
+        xscale="log",
+        xlabel="XLA bytes accessed / (inputs + outputs)",
+        title="Search steps: bytes accessed",
+    )
+    for axis in (timed.xaxis, moved.xaxis):
+        # 1, 2 and 5 in each decade, labelled plainly: no crowded minor labels on a short span.
+        axis.set_major_locator(LogLocator(subs=(1, 2, 5)))
+        style.plain_log_labels(axis)
+        axis.set_minor_formatter(NullFormatter())
+    timed.set_yticks(range(len(scenes)), [s.replace(", ", ",\n", 1) for s in scenes], fontsize=8)
+    timed.set_ylim(len(scenes) - 0.5, -0.5)
+    for axes in (timed, compiled, moved):
+        axes.grid(True, axis="x", which="both", alpha=0.3)
+        for between in range(1, len(scenes)):
+            axes.axhline(between - 0.5, color="#dddddd", linewidth=0.8)
+    style.legend_outside(moved, "right", panels=[timed])
+    return figure
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(_run.suite("targets", run, draw, __doc__.splitlines()[0]))

@@ -25,29 +25,6 @@ ROOT = pathlib.Path(__file__).resolve().parent.parent
 RESULTS = ROOT / "benchmarks" / "results"
 
 
-def _stored(name):
-    path = RESULTS / f"{name}.csv"
-    if not path.exists():
-        pytest.skip(f"{path} is not in this checkout")
-    return style.read_rows(path)
-
-
-def _benchmark(name):
-    """``benchmarks/<name>.py``, a script, loaded from its path (jax's x64 flag kept as it
-    was: benchmarks/stability.py turns it on when loaded)."""
-    import jax
-
-    x64 = jax.config.jax_enable_x64
-    path = ROOT / "benchmarks" / f"{name}.py"
-    spec = importlib.util.spec_from_file_location(f"figures_{name}", path)
-    module = importlib.util.module_from_spec(spec)
-    try:
-        spec.loader.exec_module(module)
-    finally:
-        jax.config.update("jax_enable_x64", x64)
-    return module
-
-
 @pytest.fixture
 def drawn(monkeypatch):
     """The figures ``pyplot.close`` was asked to close, kept open to be examined (and not
@@ -141,17 +118,3 @@ def test_unknown_names_never_share_a_colour_in_a_figure():
     assert len({found.pop() for found in colours.values()}) == len(colours)
     again = {}
     assert [style.style(n, again) for n in names] == [style.style(n, used) for n in names]
-
-
-def test_size_scaling_figure(tmp_path, drawn):
-    scaling = _benchmark("size_scaling")
-    rows = _stored("size_scaling")
-    at_m, at_n = scaling.FULL.nodes_at, scaling.FULL.segments_at
-    against_n = sorted((r for r in rows if r["segments"] == at_m), key=lambda r: r["nodes"])
-    against_m = sorted((r for r in rows if r["nodes"] == at_n), key=lambda r: r["segments"])
-    scaling.plot(against_n, against_m, scaling.METHODS, str(tmp_path))
-    (figure,) = drawn
-    for axes in figure.axes:  # one legend per panel (its slopes), each checked in _check
-        assert axes.get_legend() is not None
-    # A panel's labels carry its slopes: one colour per method, whatever the slope.
-    _check(figure, name=lambda label: label.split(" (slope")[0])

@@ -47,6 +47,9 @@ JAXCONTACT = {
     "swept": ("#6baed6", "P"),
     "bucket_swept": ("#74c476", "X"),
     "Search.swept (compact)": ("#225ea8", "8"),
+    "Search.swept": ("#0570b0", "p"),
+    "Search.closest (whole search)": ("#8073ac", "o"),
+    "Search.closest (compact, whole search)": ("#2d004b", "s"),
     # time_vs_error's bucket sorts with shrunk sizes: a hue per kind of size, darker as it shrinks.
     "bucket_sort f32, blocks x0.75": ("#9e9ac8", "<"),
     "bucket_sort f32, blocks x0.5": ("#756bb1", ">"),
