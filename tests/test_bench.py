@@ -6,7 +6,6 @@ answer is reported as wrong.
 """
 
 import functools
-import pathlib
 
 import numpy as np
 import pytest

@@ -17,6 +17,7 @@ from benchmarks import against, size_scaling, targets
 from benchmarks.harness import report, style
 from jaxcontact.scenes import cutting_scene
 
+
 def _args(tmp_path, **more):
     return argparse.Namespace(quick=True, out=str(tmp_path), repeats=2, **more)
 
