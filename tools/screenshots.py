@@ -3,7 +3,7 @@
 Run from the repository root after ``mkdocs build --strict``:
 ``python tools/screenshots.py [chromium]``. It serves ``site/`` over HTTP (the
 theme's search and navigation need a server, not file:// URLs) and writes PNGs of
-the home page, a guide and an API page to ``docs/screenshots/`` with a headless
+the home page, a guide, an API page and a generated block of the performance page to ``docs/screenshots/`` with a headless
 Chromium (Debian's ``chromium`` by default).
 """
 
@@ -24,6 +24,8 @@ PAGES = {
     "": "home.png",
     "guides/search/": "guide-search.png",
     "api/types/": "api-types.png",
+    # A generated block of the performance page: a table and its figure from a record.
+    "performance/#the-papers-two-tests": "performance.png",
 }
 # A desktop window: the width at which the pages' 100-column code fits beside both sidebars.
 WINDOW = "1440,900"
