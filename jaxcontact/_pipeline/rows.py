@@ -3,7 +3,7 @@
 Slip tracking and smooth normals concern only the slaves a search found:
 a few hundred of 10^5 on a cutting scene. Done on all N rows, their gathers
 cost several times the search itself (measured with the repository's
-benchmarks/friction.py). Here the rows that need the work are gathered into
+benchmarks/costs.py). Here the rows that need the work are gathered into
 a static capacity ``C`` (the ``size`` of ``jnp.nonzero``), worked on, and
 scattered back; when more rows need it than ``C`` holds, a ``cond`` does the
 work on all N rows instead, so no row is ever left out. Under ``vmap`` the

@@ -128,7 +128,7 @@ def _cells_for(extent, edge: float, num_kept: int, slack: float, chosen: bool):
             # per axis. Growing the cells instead until the grid fits gives
             # the curled chip's outline at 10^5 nodes cells 24 times its
             # radius, up to 192 segments in a cell (measured with the
-            # repository's benchmarks/bodies.py).
+            # repository's benchmarks/costs.py).
             edge *= slack
             buckets = size_class(most_cells)
         edge = _edge_class(edge)
