@@ -162,7 +162,7 @@ class Search:
         state, and searches the longer lists of the wider reach; a step that
         finds them again costs more than one without a skin. Whether it pays
         depends on the scene: the repository's benchmarks/search_step.py
-        (one step) and benchmarks/simulate.py (a ``lax.scan``) measure it.
+        (one step) and benchmarks/simulations.py (a ``lax.scan``) measure it.
       method: ``"binned"``: bucket sort with the segments binned in cells,
         each kept slave against its cell's segments; ``"unbinned"``: bucket
         sort with each kept slave against every segment (``"dense"`` still
