@@ -60,7 +60,7 @@ contact, beside a jitted call that returns one row of ``x`` (the floor of one ca
 
 The figure: each feature's time over its comparator's (log scale), per scene.
 
-    python benchmarks/costs.py                                            # about 7 min on 2 cores
+    python benchmarks/costs.py                                            # about 8 min on 2 cores
     taskset -c 0 python benchmarks/costs.py --out benchmarks/results/pinned
     python benchmarks/costs.py --quick                                    # small sizes
 """

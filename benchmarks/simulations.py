@@ -37,7 +37,7 @@ number is quoted from memory.
 The figure: the cutting and thrust forces against the tool's travel with Merchant's and
 Kienzle's predictions, and detection's share of a step in every run.
 
-    python benchmarks/simulations.py                  # about 6 min on 2 cores
+    python benchmarks/simulations.py                  # about 7 min on 2 cores
     taskset -c 0 python benchmarks/simulations.py --out benchmarks/results/pinned
     python benchmarks/simulations.py --quick          # a coarse cut, 2,000 nodes ploughing
     python benchmarks/simulations.py --fine           # and a cut at half the element size
