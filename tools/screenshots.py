@@ -3,8 +3,8 @@
 Run from the repository root after ``mkdocs build --strict``:
 ``python tools/screenshots.py [chromium]``. It serves ``site/`` over HTTP (the
 theme's search and navigation need a server, not file:// URLs) and writes PNGs of
-the home page, a guide, an API page and a generated block of the performance page to ``docs/screenshots/`` with a headless
-Chromium (Debian's ``chromium`` by default).
+the home page, a guide, an API page and a generated block of the performance page to
+``docs/screenshots/`` with a headless Chromium (Debian's ``chromium`` by default).
 """
 
 from __future__ import annotations

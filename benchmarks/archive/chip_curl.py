@@ -38,13 +38,21 @@ import warnings
 
 import numpy as np
 
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))  # benchmarks/
-from cutting import markdown_table  # noqa: E402  benchmarks/cutting.py
-
-from jaxcontact.sim import cutting, cutting_demo  # noqa: E402
+from jaxcontact.sim import cutting, cutting_demo
 
 RESULTS = pathlib.Path(__file__).parent / "results"
 CURL = cutting_demo.CURL
+
+
+def markdown_table(runs: list[dict], rows) -> str:
+    """A column per run (headed by its ``label``), a row per ``(name, key,
+    format)`` of ``rows``; a value of None reads "never"."""
+    head = "| | " + " | ".join(run["label"] for run in runs) + " |"
+    lines = [head, "|---" * (len(runs) + 1) + "|"]
+    for name, key, form in rows:
+        cells = ("never" if run[key] is None else form.format(run[key]) for run in runs)
+        lines.append(f"| {name} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
 
 
 def measure(cut: cutting.Cutting, label: str, out: pathlib.Path, pictures: bool) -> dict:

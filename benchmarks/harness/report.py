@@ -151,6 +151,7 @@ def save_figure(figure, rec: dict, path) -> str:
     import matplotlib.pyplot as plt
 
     figure.text(0.005, 0.004, caption(rec).replace("`", ""), fontsize=5.5, color="#555555")
+    figure.set_dpi(120)  # laid out at the dpi it is saved at: text does not scale with dpi
     figure.tight_layout(rect=(0, 0.03, 1, 1))
     figure.savefig(path, dpi=120, metadata={STAMP: digest(rec)})
     plt.close(figure)

@@ -50,6 +50,10 @@ JAXCONTACT = {
     "Search.swept": ("#0570b0", "p"),
     "Search.closest (whole search)": ("#8073ac", "o"),
     "Search.closest (compact, whole search)": ("#2d004b", "s"),
+    # benchmarks/simulations.py: the cutting runs.
+    "simulation, 400x mass": ("#08519c", "o"),
+    "simulation, 200x mass": ("#41ab5d", "s"),
+    "simulation, half the element": ("#807dba", "D"),
     # time_vs_error's bucket sorts with shrunk sizes: a hue per kind of size, darker as it shrinks.
     "bucket_sort f32, blocks x0.75": ("#9e9ac8", "<"),
     "bucket_sort f32, blocks x0.5": ("#756bb1", ">"),
@@ -90,6 +94,8 @@ GUIDES = {
     "all-to-all (paper)": ("#969696", "-."),
     "float32 bound": ("#b58cc7", ":"),
     "float64 bound": ("#74b9dc", ":"),
+    "Merchant": ("#4d4d4d", "--"),
+    "Kienzle (Ck45)": ("#a6761d", "-."),
 }
 # Other names for a series of the table: the benchmarks' labels over time.
 ALIASES = {

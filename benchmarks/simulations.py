@@ -1,0 +1,363 @@
+"""Simulations: orthogonal cutting against Merchant and Kienzle, the ploughing simulation's speed.
+
+Two parts, float32, each run as ``jaxcontact demo`` runs it:
+
+1. **Orthogonal cutting** (``jaxcontact.sim.cutting``: AISI 1045, 100 m/min, h = 0.10 mm,
+   rake 0°, mu = 0.3 capped at half the shear flow stress, 4 elements through h, 0.6 mm of
+   travel, mass scaled 400x), then the same cut at half the mass scaling (200x: the stable
+   step shorter by sqrt 2, the steps more by as much); with ``--fine`` a third at half the
+   element size (slow). Reported: the steady cutting and thrust forces (means over the last
+   40 % of the steps, N per mm of width), the chip's thickness ratio and shear angle (from
+   the chip's geometry), the friction angle (from the forces), beside
+
+   * **Merchant** (``sim.machining``): the shear angle 45 + gamma/2 - beta/2 and the forces
+     of the force circle for the friction angle the run gives, with the shear stress
+     tau_s = sigma_JC / sqrt 3 at the steady chip's plastic strain and temperature and the
+     primary shear zone's strain rate;
+   * **Kienzle** for Ck45: k_c1.1 = 2220 N/mm², m_c = 0.14 (König and Klocke), and the band
+     down to k_c1.1 = 1500 N/mm² that handbooks span;
+   * **mass scaling**: the forces of both runs and their difference;
+
+   and the share of a step spent in contact detection (``cutting.detection_share``: the
+   step's two searches alone, 400 steps, over whole steps; the median of 3).
+2. **The ploughing simulation** (``jaxcontact.sim.demo.run_demo``; a tool ploughing elastic
+   steel, 3 m/s, 0.5 mm of travel) at 10^4 and 63,001 nodes, the slaves the workpiece's
+   free outline (the default) and every node: the set-up and the search's sizes on the
+   host, one run to compile (allocating larger sizes if they overflowed), then the whole
+   ``lax.scan`` timed ``--repeats`` times beside the same scan with detection replaced by a
+   fixed contact result (``run(..., detect=False)``: the same elastic update and force
+   assembly, no ``Search.closest``), the two in alternation. The detection share is the
+   median over those pairs of ``1 - without / with``.
+
+A published orthogonal-cutting experiment on AISI 1045 is not in this comparison: the data
+sets found (Klippel et al. 2024, Int. J. Adv. Manuf. Technol. 135, 2871-2908, Ck45 with open
+data; the CIRP benchmark of Ivester et al. 2000) could not be read from this machine, and no
+number is quoted from memory.
+
+The figure: the cutting and thrust forces against the tool's travel with Merchant's and
+Kienzle's predictions, and detection's share of a step in every run.
+
+    python benchmarks/simulations.py                  # about 7 min on 2 cores
+    taskset -c 0 python benchmarks/simulations.py --out benchmarks/results/pinned
+    python benchmarks/simulations.py --quick          # a coarse cut, 2,000 nodes ploughing
+    python benchmarks/simulations.py --fine           # and a cut at half the element size
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import pathlib
+import sys
+import time
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))  # the repo root: benchmarks.*
+
+import numpy as np
+
+from benchmarks.harness import _run, report, style
+from jaxcontact.sim import cutting
+from jaxcontact.sim.demo import run_demo
+
+TITLE = "Simulations: orthogonal cutting, ploughing"
+POINTS = 300  # a force trace's points in the record: means over as many equal runs of steps
+COARSE = {"element": 0.05, "uncut": 0.10, "depth": 0.1, "travel": 0.25}  # --quick's cut
+PLOUGHING = {"full": ((10_000, 63_001), 0.5), "quick": ((2_000,), 0.1)}  # (nodes, travel mm)
+OPTIONS = ((("--fine",), {"action": "store_true", "help": "also cut at half the element size"}),)
+# The quantities of the cutting table: (row, summary key, decimals; None: as it is).
+QUANTITIES = (
+    ("cutting force F_c (N/mm)", "cutting_force_N_per_mm", 1),
+    ("thrust force F_t (N/mm)", "thrust_force_N_per_mm", 1),
+    ("chip thickness ratio h_c / h", "chip_thickness_ratio", 2),
+    ("shear angle from the chip (°)", "shear_angle_deg", 1),
+    ("friction angle from the forces (°)", "friction_angle_deg", 1),
+    ("chip plastic strain (median)", "chip_plastic_strain", 2),
+    ("chip temperature (°C, median)", "chip_temperature_C", 0),
+    ("shear zone strain rate (1/s)", "shear_zone_strain_rate_per_s", -2),
+    ("Merchant: tau_s (MPa)", "merchant_shear_stress_MPa", 0),
+    ("Merchant: shear angle (°)", "merchant_shear_angle_deg", 1),
+    ("Merchant: F_c (N/mm)", "merchant_cutting_force_N_per_mm", 1),
+    ("Merchant: F_t (N/mm)", "merchant_thrust_force_N_per_mm", 1),
+    ("Kienzle (Ck45): F_c (N/mm)", "kienzle_cutting_force_N_per_mm", 1),
+    ("deepest penetration / element", "max_penetration_over_element", 3),
+    ("eroded elements", "eroded_elements", None),
+    ("own contacts left out (deeper than 0.25 element)", "dropped_own_contacts", None),
+    ("a search overflowed", "overflow", None),
+    ("nodes", "nodes", None),
+    ("steps", "steps", None),
+    ("steps per second (the first compile included)", "steps_per_second", 0),
+    ("contact detection's share of a step (%)", "detection_percent", 1),
+    ("wall time, detection share included (s)", "wall_s", 0),
+)
+
+
+# -- orthogonal cutting --------------------------------------------------------------
+
+
+def cuts(quick: bool, fine: bool):
+    """``(Cutting, label, series)`` of each run: the default cut (``--quick``: a coarse one),
+    the same at half the mass scaling, and with ``fine`` at half the element size."""
+    base = cutting.Cutting(**COARSE) if quick else cutting.Cutting()
+    kind = "coarse" if quick else "default"
+    mass = base.mass_scaling
+    plan = [
+        (base, f"{kind} ({mass:.0f}x mass)", f"simulation, {mass:.0f}x mass"),
+        (
+            dataclasses.replace(base, mass_scaling=mass / 2),
+            f"half the scaling ({mass / 2:.0f}x)",
+            f"simulation, {mass / 2:.0f}x mass",
+        ),
+    ]
+    if fine:
+        half = dataclasses.replace(base, element=base.element / 2)
+        plan.append((half, "half the element", "simulation, half the element"))
+    return plan
+
+
+def trace(travel, force, points: int = POINTS) -> dict:
+    """The force on the tool against its travel, in ``points`` means over equal runs of
+    steps (a run has one per step: too many for the record, and noisy step to step)."""
+    travel, force = np.asarray(travel, np.float64), np.asarray(force, np.float64)
+    edges = np.linspace(0, len(travel), min(points, len(travel)) + 1).round().astype(int)
+    parts = list(zip(edges[:-1], edges[1:], strict=True))
+    return {
+        "travel_mm": [round(float(travel[a:b].mean()), 5) for a, b in parts],
+        "cutting_N_per_mm": [round(float(force[a:b, 0].mean()), 3) for a, b in parts],
+        "thrust_N_per_mm": [round(float(force[a:b, 1].mean()), 3) for a, b in parts],
+    }
+
+
+def summarise(model, state, record, frames, seconds, label: str, series: str) -> dict:
+    """A cutting run's summary (``cutting.summary``) with what the record adds: its label
+    and series, the element, the own contacts left out, the force trace and where the
+    steady window (the last 40 % of the steps) begins."""
+    summary = cutting.summary(model, state, record, frames, seconds, 0.0, cutting.MU)
+    steps = len(record.force)
+    at = np.arange(1, steps + 1)
+    lowest = np.asarray(cutting.tool_position(model.cut, model.start_x, at), np.float64)
+    travel = model.start_x - lowest
+    window = max(1, round(0.4 * steps))
+    summary.update(
+        label=label,
+        series=series,
+        element_mm=model.cut.element,
+        dropped_own_contacts=int(np.sum(record.dropped)),
+        window_from_mm=float(travel[steps - window]),
+        trace=trace(travel, record.force),
+    )
+    return summary
+
+
+def measure_cut(cut, label: str, series: str) -> dict:
+    started = time.perf_counter()
+    model, state, record, frames, seconds = cutting.run(cut, 0.0, cutting.MU)
+    summary = summarise(model, state, record, frames, seconds, label, series)
+    summary["detection_share"] = cutting.detection_share(model, state, 0.0, cutting.MU)
+    summary["detection_percent"] = 100 * summary["detection_share"]
+    summary["wall_s"] = time.perf_counter() - started
+    print(
+        f"{label}: F_c {summary['cutting_force_N_per_mm']:.1f} N/mm, "
+        f"F_t {summary['thrust_force_N_per_mm']:.1f} N/mm, "
+        f"chip ratio {summary['chip_thickness_ratio']:.2f}, "
+        f"{summary['steps']} steps in {summary['wall_s']:.0f} s",
+        file=sys.stderr,
+        flush=True,
+    )
+    return summary
+
+
+def rounded(value, decimals):
+    """A table cell: ``value`` to ``decimals`` places (negative: significant figures)."""
+    if value is None or decimals is None:
+        return value
+    if decimals < 0:
+        return float(f"{value:.{-decimals}g}")
+    return round(float(value), decimals) if decimals else round(float(value))
+
+
+def cutting_table(runs) -> dict:
+    """A row per quantity, a column per run."""
+    columns = ["quantity", *(run["label"] for run in runs)]
+    cells = [
+        [name, *(rounded(run[key], decimals) for run in runs)] for name, key, decimals in QUANTITIES
+    ]
+    base = runs[0]
+    note = (
+        f"Cut: {base['cutting_speed_m_per_min']:g} m/min, h = {base['uncut_chip_thickness_mm']:g}"
+        f" mm, rake {base['rake_deg']:g}°, clearance 7°, edge radius 2 µm, mu = "
+        f"{base['friction']:g} capped at {base['friction_shear_factor']:g} of A/sqrt 3 "
+        f"(Zorev's sticking zone), plane strain, {base['element_mm'] * 1000:g} µm elements. "
+        "Forces per mm of width, means over the last 40 % of the steps; one run of each. "
+        "A published experiment is not compared here (the module's docstring says why)."
+    )
+    return report.table(columns, cells, title="Orthogonal cutting, AISI 1045", note=note)
+
+
+def cutting_notes(runs) -> list[str]:
+    """What the cutting runs say beside the table: Kienzle's band, Merchant's and Kienzle's
+    forces over the simulated, what halving the mass scaling changed."""
+    base = runs[0]
+    low, high = base["kienzle_band_N_per_mm"]
+    notes = [
+        f"Kienzle's band for Ck45 at h = {base['uncut_chip_thickness_mm']:g} mm: {low:.0f} to "
+        f"{high:.0f} N/mm (k_c1.1 from 1500 to 2220 N/mm², m_c = 0.14). In the "
+        f"{base['label']} run the simulated F_c is {base['cutting_force_N_per_mm'] / high:.2f} "
+        f"of Kienzle's tabulated value; Merchant's F_c for the run's own friction angle is "
+        f"{base['merchant_cutting_force_N_per_mm'] / base['cutting_force_N_per_mm']:.2f} of "
+        "the simulated."
+    ]
+    if len(runs) > 1:
+        half = runs[1]
+        change = {
+            key: 100 * (half[key] / base[key] - 1)
+            for key in ("cutting_force_N_per_mm", "thrust_force_N_per_mm", "chip_thickness_ratio")
+        }
+        notes.append(
+            f"Mass scaling: halving it changed F_c by {change['cutting_force_N_per_mm']:+.1f} %, "
+            f"F_t by {change['thrust_force_N_per_mm']:+.1f} % and the chip ratio by "
+            f"{change['chip_thickness_ratio']:+.1f} %."
+        )
+    return notes
+
+
+# -- the ploughing simulation ----------------------------------------------------------
+
+
+def measure_ploughing(nodes: int, travel: float, repeats: int, slaves: str) -> dict:
+    summary, drawn = run_demo(nodes, travel, repeats, np.float32, slaves)
+    config, timed, untimed = drawn[2], drawn[5], drawn[6]
+    return ploughing_row(summary, config.sizes.num_slaves, timed, untimed, slaves)
+
+
+def ploughing_row(summary, num_slaves: int, timed, untimed, slaves: str) -> dict:
+    """One ploughing run as plain numbers: ``summary`` a ``demo.Summary``, ``timed`` and
+    ``untimed`` the ``Timing`` of the scan with and without detection."""
+    return {
+        "nodes": summary.nodes,
+        "slaves": slaves,
+        "slave nodes": num_slaves,
+        "steps": summary.steps,
+        "steps/s": round(summary.steps_per_s),
+        "scan s": round(timed.median_s, 4),
+        "scan p10 s": round(timed.p10_s, 4),
+        "scan p90 s": round(timed.p90_s, 4),
+        "without detection s": round(untimed.median_s, 4),
+        "detection share": round(summary.detection_share, 4),
+        "detection %": round(100 * summary.detection_share, 1),
+        "list rebuilds": summary.rebuilds,
+        "compile + first run s": round(summary.first_s, 2),
+    }
+
+
+def ploughing_table(rows, travel: float, repeats: int) -> dict:
+    columns = (
+        "nodes",
+        "slaves",
+        "steps",
+        "steps/s",
+        "scan s",
+        "without detection s",
+        "detection %",
+        "list rebuilds",
+        "compile + first run s",
+    )
+    cells = [{**entry, "slaves": f"{entry['slaves']} ({entry['slave nodes']:,})"} for entry in rows]
+    note = (
+        f"Tool travel {travel:g} mm at 3 m/s, steel with mass scaling 1e4. `scan s`: the "
+        f"whole `lax.scan`, median of {repeats} runs (the record's data keeps the 10th and "
+        "90th percentiles); `detection %`: the median over pairs of runs of "
+        "1 - without / with; a scan of milliseconds on a loaded machine can make it negative."
+    )
+    return report.table(columns, cells, title="The ploughing simulation", note=note)
+
+
+# -- the suite ---------------------------------------------------------------------------
+
+
+def run(args) -> dict:
+    started = time.perf_counter()
+    runs = [measure_cut(*plan) for plan in cuts(args.quick, args.fine)]
+    sizes, travel = PLOUGHING["quick" if args.quick else "full"]
+    repeats = args.repeats or 5
+    ploughing = [
+        measure_ploughing(nodes, travel, repeats, slaves)
+        for nodes in sizes
+        for slaves in ("surface", "all")
+    ]
+    notes = [*cutting_notes(runs), f"Whole run {time.perf_counter() - started:.0f} s."]
+    return {
+        "title": TITLE,
+        "tables": [cutting_table(runs), ploughing_table(ploughing, travel, repeats)],
+        "data": {"cutting": runs, "ploughing": ploughing},
+        "notes": notes,
+    }
+
+
+MERCHANT, KIENZLE, SEARCH = "Merchant", "Kienzle (Ck45)", "Search.closest (reused state)"
+
+
+def draw(record, plt):
+    """The cutting and thrust forces against travel, Merchant's and Kienzle's forces beside
+    them, the steady window shaded; below, detection's share of a step in every run."""
+    runs, ploughing = record["data"]["cutting"], record["data"]["ploughing"]
+    labels = [f"cutting, {run['label']}" for run in runs]
+    labels += [f"ploughing, {r['nodes']:,} nodes, {r['slaves']} slaves" for r in ploughing]
+    figure = plt.figure(figsize=(11, 6.2 + 0.28 * len(labels)), dpi=120)
+    grid = figure.add_gridspec(2, 2, height_ratios=(3, 0.8 + 0.3 * len(labels)))
+    forces = [figure.add_subplot(grid[0, 0]), figure.add_subplot(grid[0, 1])]
+    used = {}
+    for axes, key, merchant, name in (
+        (forces[0], "cutting_N_per_mm", "merchant_cutting_force_N_per_mm", "cutting force F_c"),
+        (forces[1], "thrust_N_per_mm", "merchant_thrust_force_N_per_mm", "thrust force F_t"),
+    ):
+        for run in runs:
+            looks = style.style(run["series"], used, kind="jaxcontact")
+            travel = run["trace"]["travel_mm"]
+            every = max(1, len(travel) // 12)
+            axes.plot(travel, run["trace"][key], label=run["series"], markevery=every, **looks)
+        base = runs[0]
+        # The steady window: a rule where it starts (a fill would compete with Kienzle's band).
+        axes.axvline(base["window_from_mm"], color="#999999", linewidth=0.9, linestyle=(0, (4, 3)))
+        axes.annotate(
+            "steady window →",
+            (base["window_from_mm"], 0.0),
+            xycoords=("data", "axes fraction"),
+            xytext=(3, 4),
+            textcoords="offset points",
+            fontsize=7,
+            color="#666666",
+        )
+        axes.axhline(base[merchant], label=MERCHANT, **style.style(MERCHANT, used, kind="guide"))
+        if key == "cutting_N_per_mm":
+            low, high = base["kienzle_band_N_per_mm"]
+            kienzle = style.style(KIENZLE, used, kind="guide")
+            axes.axhspan(low, high, color=kienzle["color"], alpha=0.12, linewidth=0)
+            axes.axhline(base["kienzle_cutting_force_N_per_mm"], label=KIENZLE, **kienzle)
+        axes.set_ylim(bottom=0)
+        axes.set_xlim(left=0)
+        axes.set(xlabel="tool travel (mm)", ylabel=f"{name} (N per mm of width)")
+        axes.set_title(f"{name[0].upper()}{name[1:]}", fontsize=9.5)
+    style.legend_outside(forces[1], "right")
+
+    axes = figure.add_subplot(grid[1, :])
+    shares = [run["detection_share"] for run in runs] + [r["detection share"] for r in ploughing]
+    at = np.arange(len(labels))[::-1]
+    colour = style.style(SEARCH, used)["color"]
+    percent = [100 * share for share in shares]
+    axes.barh(at, percent, color=colour, height=0.6, label=SEARCH)
+    for y, value in zip(at, percent, strict=True):
+        axes.text(max(value, 0) + 0.6, y, f"{value:.0f} %", va="center", fontsize=7.5)
+    axes.set_yticks(at, labels, fontsize=7.5)
+    axes.set_xlim(min(0.0, 1.15 * min(percent, default=0)), max(10.0, 1.15 * max(percent)))
+    axes.axvline(0, color="#555555", linewidth=0.8)
+    axes.set_xlabel("share of a step in contact detection, Search.closest (%)")
+    axes.set_title("Contact detection's share of a simulation step", fontsize=9.5)
+    figure.suptitle(
+        "Orthogonal cutting against Merchant and Kienzle (band: Kienzle's handbook span); "
+        "contact detection's share of a step",
+        fontsize=10.5,
+    )
+    return figure
+
+
+if __name__ == "__main__":
+    sys.exit(_run.suite("simulations", run, draw, __doc__.splitlines()[0], options=OPTIONS))

@@ -1,0 +1,149 @@
+"""benchmarks/simulations.py: its record and figure from hand-built runs, and the cutting
+summary it records from the coarse cut tests/sim/test_cutting.py runs.
+
+Nothing is timed and no full simulation is run: the suite's measurements are
+``cutting.run``, ``cutting.summary``, ``cutting.detection_share`` and ``demo.run_demo``,
+which tests/sim tests; here are tested what the suite adds (the force trace, the tables, the
+notes, the figure).
+"""
+
+import json
+
+import numpy as np
+import pytest
+
+from benchmarks import simulations
+from benchmarks.harness import report, style
+from jaxcontact._timing import Timing
+from jaxcontact.sim import cutting
+from jaxcontact.sim.demo import Summary
+from tests.sim.test_cutting import COARSE
+
+
+def test_the_trace_is_means_over_equal_runs_of_steps():
+    travel = np.linspace(0.0, 1.0, 1000)
+    force = np.stack([np.arange(1000.0), -np.arange(1000.0)], axis=1)
+    found = simulations.trace(travel, force, points=10)
+    assert len(found["travel_mm"]) == len(found["cutting_N_per_mm"]) == 10
+    assert found["cutting_N_per_mm"][0] == pytest.approx(49.5)
+    assert found["thrust_N_per_mm"][-1] == pytest.approx(-949.5)
+    assert np.all(np.diff(found["travel_mm"]) > 0)
+    short = simulations.trace(travel[:4], force[:4], points=10)  # fewer steps than points
+    assert short["cutting_N_per_mm"] == [0.0, 1.0, 2.0, 3.0]
+
+
+def _run(label, series, cutting_force, mass_scaling):
+    """A cutting run as ``measure_cut`` records it: every key the table and figure read."""
+    found = {key: 1.0 for _, key, _ in simulations.QUANTITIES}
+    found.update(
+        label=label,
+        series=series,
+        cutting_speed_m_per_min=100.0,
+        uncut_chip_thickness_mm=0.1,
+        rake_deg=0.0,
+        friction=0.3,
+        friction_shear_factor=0.5,
+        element_mm=0.025,
+        mass_scaling=mass_scaling,
+        cutting_force_N_per_mm=cutting_force,
+        thrust_force_N_per_mm=60.0,
+        chip_thickness_ratio=1.8,
+        merchant_cutting_force_N_per_mm=160.0,
+        merchant_thrust_force_N_per_mm=50.0,
+        kienzle_cutting_force_N_per_mm=306.4,
+        kienzle_band_N_per_mm=[207.1, 306.4],
+        eroded_elements=0,
+        dropped_own_contacts=12,
+        overflow=False,
+        detection_share=0.18,
+        detection_percent=18.0,
+        window_from_mm=0.36,
+        trace=simulations.trace(np.linspace(0, 0.6, 50), np.full((50, 2), [cutting_force, 60.0])),
+    )
+    return found
+
+
+def _ploughing(nodes, slaves, share):
+    summary = Summary(nodes, 717, 1575.0, share, 19, 12, 0.01, (1.0, 2.0), 3.1)
+    timed, untimed = Timing(3.1, 0.455, 0.446, 0.468, 5), Timing(0.4, 0.388, 0.38, 0.39, 5)
+    return simulations.ploughing_row(summary, 296, timed, untimed, slaves)
+
+
+@pytest.fixture
+def record():
+    runs = [
+        _run("default (400x mass)", "simulation, 400x mass", 209.3, 400.0),
+        _run("half the scaling (200x)", "simulation, 200x mass", 209.5, 200.0),
+    ]
+    ploughing = [_ploughing(10_000, "surface", 0.138), _ploughing(10_000, "all", -0.02)]
+    tables = [
+        simulations.cutting_table(runs),
+        simulations.ploughing_table(ploughing, 0.5, 5),
+    ]
+    data = {"cutting": runs, "ploughing": ploughing}
+    notes = simulations.cutting_notes(runs)
+    rec = report.record("simulations", simulations.TITLE, tables, data=data, notes=notes)
+    return json.loads(json.dumps(rec, allow_nan=False))  # as read back from the file
+
+
+def test_the_tables_and_notes(record):
+    cut, plough = record["tables"]
+    assert cut["columns"] == ["quantity", "default (400x mass)", "half the scaling (200x)"]
+    assert len(cut["rows"]) == len(simulations.QUANTITIES)
+    rows = {row[0]: row[1:] for row in cut["rows"]}
+    assert rows["cutting force F_c (N/mm)"] == [209.3, 209.5]
+    assert rows["a search overflowed"] == [False, False]
+    assert rows["contact detection's share of a step (%)"] == [18.0, 18.0]
+    assert plough["rows"][0][:2] == [10_000, "surface (296)"]
+    assert plough["rows"][1][plough["columns"].index("detection %")] == -2.0
+    kienzle, mass = record["notes"]
+    assert "207 to 306 N/mm" in kienzle and "0.68 of Kienzle's" in kienzle
+    assert "halving it changed F_c by +0.1 %" in mass
+
+
+def test_the_figure_draws_from_the_record_alone(record):
+    plt = report.pyplot()
+    figure = simulations.draw(record, plt)
+    try:
+        figure.canvas.draw()
+        labels = set()
+        for axes in figure.axes:
+            labels |= {line.get_label() for line in axes.lines}
+            labels |= {bars.get_label() for bars in axes.containers}
+        labels = {label for label in labels if not label.startswith("_")}
+        assert labels == {
+            "simulation, 400x mass",
+            "simulation, 200x mass",
+            simulations.MERCHANT,
+            simulations.KIENZLE,
+            simulations.SEARCH,
+        }
+        missing = {label for label in labels if style.canonical(label) not in style.STYLES}
+        assert not missing, f"series not in benchmarks/harness/style.py's STYLES: {missing}"
+        legend = figure.axes[1].get_legend()
+        for axes in figure.axes:
+            assert not legend.get_window_extent().overlaps(axes.bbox)
+        shares = figure.axes[2]
+        assert [t.get_text() for t in shares.get_yticklabels()][-1] == (
+            "ploughing, 10,000 nodes, all slaves"
+        )
+    finally:
+        plt.close(figure)
+
+
+@pytest.mark.slow
+def test_the_recorded_summary_of_the_coarse_cut():
+    # The run tests/sim/test_cutting.py's coarse_run makes (compiled once per process).
+    cut = cutting.Cutting(travel=0.25, **COARSE)
+    model, state, found, frames, seconds = cutting.run(cut, 0.0, cutting.MU, chunks=5)
+    summary = simulations.summarise(model, state, found, frames, seconds, "coarse", "series")
+    trace = summary["trace"]
+    assert len(trace["travel_mm"]) == simulations.POINTS
+    assert 0 < trace["travel_mm"][0] < trace["travel_mm"][-1] == pytest.approx(0.25, rel=0.02)
+    assert 0.5 * 0.25 < summary["window_from_mm"] < 0.25
+    steady = np.array(trace["cutting_N_per_mm"])[np.array(trace["travel_mm"]) >= 0.16]
+    assert steady.mean() == pytest.approx(summary["cutting_force_N_per_mm"], rel=0.1)
+    summary.update(detection_share=0.2, detection_percent=20.0, wall_s=1.0)
+    table = simulations.cutting_table([summary])
+    json.dumps(table, allow_nan=False)
+    assert [row[0] for row in table["rows"]] == [name for name, _, _ in simulations.QUANTITIES]
