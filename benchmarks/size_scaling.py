@@ -353,7 +353,11 @@ def run(args) -> dict:
         if done < len(scenes):
             # Every scene's rows kept as soon as they are measured, so a run stopped part way
             # (a lent GPU's time ran out on one: 11 of 13 scenes in 330 s) leaves them behind.
-            _keep_partial(args, found(rows, sweeps, f"Partial: {done} of {len(scenes)} scenes."))
+            _run.keep_partial(
+                "size_scaling",
+                args,
+                found(rows, sweeps, f"Partial: {done} of {len(scenes)} scenes."),
+            )
     minutes = (time.perf_counter() - began) / 60
     return found(rows, sweeps, f"The whole run took {minutes:.1f} min.")
 
@@ -373,19 +377,6 @@ def found(rows, sweeps: Sweeps, note: str) -> dict:
         "data": data,
         "notes": notes,
     }
-
-
-def _keep_partial(args, partial) -> None:
-    """The record so far, the JSON alone; the finished run writes over it, figure included."""
-    rec = report.record(
-        "size_scaling",
-        partial["title"],
-        partial["tables"],
-        data=partial["data"],
-        notes=partial["notes"],
-        quick=args.quick,
-    )
-    report.save(rec, args.out)
 
 
 def draw(record, plt):

@@ -40,7 +40,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from benchmarks import peers
-from benchmarks.harness import _run, report
+from benchmarks.harness import _run
 from benchmarks.harness.internals import measure
 from benchmarks.peer_codes import baselines, ipc
 from jaxcontact import CrossingList, Search, swept
@@ -256,15 +256,7 @@ def run(args) -> dict:
         if done < len(scenes):
             # A lent GPU's time ran out part way once (2 of 7 scenes in 135 s), leaving none.
             found = _found(runs, [f"Partial: {done} of {len(scenes)} scenes."])
-            partial = report.record(
-                "swept_peers",
-                TITLE,
-                found["tables"],
-                data=found["data"],
-                notes=found["notes"],
-                quick=args.quick,
-            )
-            report.save(partial, args.out)
+            _run.keep_partial("swept_peers", args, found)
     return _found(runs)
 
 

@@ -332,7 +332,9 @@ def run(args) -> dict:
             rows += found["rows"]
             skipped |= found["skipped"]
             if done < len(scenes):
-                _keep_partial(args, _found(rows, skipped, repeats, f"{done} of {len(scenes)}"))
+                _run.keep_partial(
+                    "targets", args, _found(rows, skipped, repeats, f"{done} of {len(scenes)}")
+                )
     finally:
         jax.config.update("jax_enable_x64", x64)
     return _found(rows, skipped, repeats)
@@ -359,20 +361,6 @@ def _found(rows, skipped, repeats, partial=None) -> dict:
         "data": {"rows": rows, "target_compile_s": TARGET_COMPILE_S},
         "notes": notes,
     }
-
-
-def _keep_partial(args, found) -> None:
-    """Each scene's rows kept as they come, the JSON alone (a lent GPU's time may run out);
-    the finished run writes over it, figure included."""
-    rec = report.record(
-        "targets",
-        found["title"],
-        found["tables"],
-        data=found["data"],
-        notes=found["notes"],
-        quick=args.quick,
-    )
-    report.save(rec, args.out)
 
 
 def draw(record, plt):

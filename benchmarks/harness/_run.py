@@ -433,8 +433,16 @@ def suite(name, run, draw, description, argv=None, *, options=()) -> int:
     args = parser.parse_args(argv)
     reuse_pages()  # every peer at its best (benchmarks/archive/malloc.py)
     jax.config.update("jax_enable_x64", True)  # float64 scenes and variants beside float32
-    found = run(args)
-    rec = report.record(
+    rec = _record(name, args, run(args), argv)
+    rec["allocator"] = list(_allocator)
+    written = report.save(rec, args.out, draw)
+    print(report.markdown(rec, f"{name}.png" if len(written) > 1 else None))
+    print(f"wrote {', '.join(written)}", file=sys.stderr)
+    return 0
+
+
+def _record(name: str, args, found: dict, argv=None) -> dict:
+    return report.record(
         name,
         found["title"],
         found["tables"],
@@ -443,11 +451,14 @@ def suite(name, run, draw, description, argv=None, *, options=()) -> int:
         argv=argv,
         quick=args.quick,
     )
-    rec["allocator"] = list(_allocator)
-    written = report.save(rec, args.out, draw)
-    print(report.markdown(rec, f"{name}.png" if len(written) > 1 else None))
-    print(f"wrote {', '.join(written)}", file=sys.stderr)
-    return 0
+
+
+def keep_partial(name: str, args, found: dict) -> None:
+    """Saves ``found`` (what ``run`` returns) as the record so far, the JSON alone: a run cut
+    short (a lent GPU's time ran out part way once) leaves its finished scenes. The finished
+    run writes over it, figure included."""
+    rec = _record(name, args, found)
+    report.save(rec, args.out)
 
 
 def cores_short_of(threads: int) -> str | None:
