@@ -406,8 +406,11 @@ def draw(record, plt):
         title="Search steps: bytes accessed",
     )
     for axis in (timed.xaxis, moved.xaxis):
-        # 1, 2 and 5 in each decade, labelled plainly: no crowded minor labels on a short span.
-        axis.set_major_locator(LogLocator(subs=(1, 2, 5)))
+        # Labelled plainly: 1, 2 and 5 in each decade on a short span, decades alone on a
+        # long one (the times span five), so that no two labels run into each other.
+        low, high = axis.axes.get_xlim()
+        subs = (1,) if high / low > 300 else (1, 2, 5)
+        axis.set_major_locator(LogLocator(subs=subs))
         style.plain_log_labels(axis)
         axis.set_minor_formatter(NullFormatter())
     timed.set_yticks(range(len(scenes)), [s.replace(", ", ",\n", 1) for s in scenes], fontsize=8)
