@@ -230,7 +230,8 @@ def points(rows, method, axis: str, value=time_ms) -> tuple[list, list]:
     """``(sizes, values)`` of ``method``'s rows that have a ``value``; ``axis``: ``"nodes"``
     or ``"segments"``."""
     found = [(r[axis], value(r)) for r in rows if r["method"] == method]
-    found = [(size, number) for size, number in found if number is not None]
+    # Sorted by size: the scene both sweeps share comes in the other sweep's order.
+    found = sorted((size, number) for size, number in found if number is not None)
     return [size for size, _ in found], [number for _, number in found]
 
 
