@@ -119,8 +119,11 @@ def stale(results=report.RESULTS, results_page=RESULTS_MD, performance=PERFORMAN
     if not results_page.exists() or results_page.read_text() != results_md(results, results_page):
         found.append(f"{results_page.name}: not generated from the stored JSON")
     text = performance.read_text()
-    if performance_md(text, results, performance) != text:
-        found.append(f"{performance.name}: a block differs from its JSON")
+    try:
+        if performance_md(text, results, performance) != text:
+            found.append(f"{performance.name}: a block differs from its JSON")
+    except FileNotFoundError as missing:
+        found.append(str(missing))
     for path in report.stored(results):
         png = path.with_suffix(".png")
         if not png.exists():
