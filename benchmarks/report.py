@@ -54,7 +54,9 @@ SUITES = {
 ARGUMENTS = {"against": ("--against", "4bb0a9e")}
 RESULTS_MD = ROOT / "benchmarks" / "RESULTS.md"
 PERFORMANCE = ROOT / "docs" / "performance.md"
-BLOCK = re.compile(r"(<!-- report: (\S+) -->\n)(.*?)(<!-- /report -->)", re.S)
+# A generated block: <!-- report: RECORD --> or <!-- report: RECORD tables=0,1 --> (the tables
+# the page shows, figure first; "tables=" for none), then the text, then <!-- /report -->.
+BLOCK = re.compile(r"(<!-- report: (\S+)(?: tables=([\d,]*))? -->\n)(.*?)(<!-- /report -->)", re.S)
 
 
 def _link(png: pathlib.Path, page: pathlib.Path) -> str | None:
@@ -63,10 +65,13 @@ def _link(png: pathlib.Path, page: pathlib.Path) -> str | None:
     return pathlib.Path(os.path.relpath(png, page.parent)).as_posix()
 
 
-def block(json_path: pathlib.Path, page: pathlib.Path) -> str:
-    """A record's markdown as ``page`` shows it (its figure linked relative to the page)."""
+def block(json_path: pathlib.Path, page: pathlib.Path, tables=None) -> str:
+    """A record's markdown as ``page`` shows it (its figure linked relative to the page):
+    every table, or those of ``tables`` with a link to the rest in RESULTS.md."""
     rec = report.load(json_path)
-    return report.markdown(rec, _link(json_path.with_suffix(".png"), page))
+    figure = _link(json_path.with_suffix(".png"), page)
+    results = pathlib.Path(os.path.relpath(RESULTS_MD, page.parent)).as_posix()
+    return report.markdown(rec, figure, tables, f"[`benchmarks/RESULTS.md`]({results})")
 
 
 def _where(json_path: pathlib.Path, results: pathlib.Path) -> str:
@@ -108,7 +113,10 @@ def performance_md(text: str, results: pathlib.Path = report.RESULTS, page=PERFO
         path = results / match.group(2)
         if not path.exists():
             raise FileNotFoundError(f"{page.name}: a block names {match.group(2)}, not stored")
-        return f"{match.group(1)}{block(path, page)}\n{match.group(4)}"
+        tables = match.group(3)
+        if tables is not None:
+            tables = [int(i) for i in tables.split(",") if i]
+        return f"{match.group(1)}{block(path, page, tables)}\n{match.group(5)}"
 
     return BLOCK.sub(rewrite, text)
 

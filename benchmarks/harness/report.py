@@ -247,14 +247,26 @@ def markdown_table(tab: dict) -> str:
     return "\n".join(lines)
 
 
-def markdown(rec: dict, figure_link: str | None) -> str:
+def markdown(rec: dict, figure_link: str | None, tables=None, elsewhere: str | None = None) -> str:
     """A record as markdown: its provenance, notes, tables and figure (``figure_link``: the
-    PNG's path relative to the page, None for none)."""
+    PNG's path relative to the page, None for none).
+
+    ``tables``: the indices of the tables to show, figure first (a page's summary); None for
+    every table, figure last (the full record). ``elsewhere``: a link to the full record, said
+    where tables are left out.
+    """
     parts = [f"Command: {caption(rec)}."]
     parts += list(rec.get("notes", ()))
-    parts += [markdown_table(t) for t in rec["tables"]]
-    if figure_link:
-        parts.append(f"![{rec['title']}]({figure_link})")
+    shown = rec["tables"] if tables is None else [rec["tables"][i] for i in tables]
+    figure = [f"![{rec['title']}]({figure_link})"] if figure_link else []
+    if tables is not None:
+        parts += figure
+    parts += [markdown_table(t) for t in shown]
+    if tables is None:
+        parts += figure
+    left = len(rec["tables"]) - len(shown)
+    if left and elsewhere:
+        parts.append(f"{left} more table{'s' * (left > 1)} of this record: {elsewhere}.")
     return "\n\n".join(parts)
 
 
