@@ -1,8 +1,9 @@
-"""What the benchmark modules share: timing rows, CSV and markdown output, a progress bar.
+"""What the benchmark suites share: timing rows, the command line, a progress bar.
 
-Every benchmark collects ``dict`` rows with the same keys (``COLUMNS``), so
-one CSV writer and one table printer serve them all, and a row carries its
-own check against the reference beside its timing. ``sized_contact`` and ``sized_crossing``
+Every benchmark collects ``dict`` rows with the same keys (``COLUMNS``), so the suites
+build their tables alike, and a row carries its own check against the reference beside
+its timing; ``suite`` is every maintained suite's command line (its record:
+``harness/report.py``). ``sized_contact`` and ``sized_crossing``
 are the bucket sorts the benchmarks time: fixed ``Sizes`` measured outside
 the timer, the whole search (broad phase included) inside it.
 """
@@ -10,7 +11,6 @@ the timer, the whole search (broad phase included) inside it.
 from __future__ import annotations
 
 import argparse
-import csv
 import ctypes
 import ctypes.util
 import functools
@@ -311,108 +311,15 @@ def reuse_pages() -> None:
 
 def machine() -> str:
     """One line: the CPU, the cores this process may use, jax and numpy versions."""
-    cpu = platform.processor() or platform.machine()
-    try:
-        with open("/proc/cpuinfo") as info:
-            fields = dict(
-                (key.strip(), value.strip())
-                for key, _, value in (line.partition(":") for line in info)
-                if key.strip() in ("model name", "cpu family", "model")
-            )
-        cpu = fields.get("model name", cpu)
-        # "AMD EPYC" alone named machines whose speeds differed 3x (Zen 5 is family 26).
-        if "cpu family" in fields:
-            cpu += f" (family {fields['cpu family']}, model {fields.get('model', '?')})"
-    except OSError:
-        pass
     return "; ".join(
         [
-            cpu,
+            report.cpu(),
             pinned_note(),
             f"python {platform.python_version()}, jax {jax.__version__}, "
             f"numpy {np.__version__}, {jax.devices()[0].device_kind}",
             *_allocator,
         ]
     )
-
-
-def markdown(rows, columns) -> str:
-    """A markdown table of ``rows`` restricted to ``columns``."""
-    lines = ["| " + " | ".join(columns) + " |", "|" + "---|" * len(columns)]
-    for entry in rows:
-        cells = [f"{entry[c]:,}" if isinstance(entry[c], int) else str(entry[c]) for c in columns]
-        lines.append("| " + " | ".join(cells) + " |")
-    return "\n".join(lines)
-
-
-def write(out: str, name: str, rows, text: str) -> list[str]:
-    """Writes ``<out>/<name>.csv`` (every column) and ``<out>/<name>.md``; returns the paths."""
-    os.makedirs(out, exist_ok=True)
-    paths = [os.path.join(out, f"{name}.csv"), os.path.join(out, f"{name}.md")]
-    with open(paths[0], "w", newline="") as stream:
-        writer = csv.DictWriter(stream, COLUMNS)
-        writer.writeheader()
-        writer.writerows(rows)
-    with open(paths[1], "w") as stream:
-        stream.write(text)
-    return paths
-
-
-def pyplot(out: str):
-    """matplotlib's pyplot on the headless Agg backend (``out`` made), or None if not installed."""
-    os.makedirs(out, exist_ok=True)
-    try:
-        import matplotlib
-    except ImportError:
-        return None
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
-def save_figure(figure, out: str, name: str) -> str:
-    """Lays ``figure`` out, writes it to ``<out>/<name>.png`` (120 dpi), closes it; the path."""
-    import matplotlib.pyplot as plt
-
-    figure.tight_layout()
-    path = os.path.join(out, f"{name}.png")
-    figure.savefig(path, dpi=120)
-    plt.close(figure)
-    return path
-
-
-def section(name, title, quick, note, body, pictures) -> str:
-    """A benchmark's markdown: heading, command, machine, ``note``, ``body`` lines, pictures."""
-    command = f"python benchmarks/{name}.py{' --quick' if quick else ''}"
-    return "\n".join(
-        [
-            f"## {title}",
-            "",
-            f"`{command}`; {machine()}; {note}",
-            "",
-            *body,
-            "",
-            *[f"![{os.path.basename(p)}]({os.path.basename(p)})" for p in pictures],
-            "",
-        ]
-    )
-
-
-def main(run, description, argv=None, *, slow: bool = False) -> int:
-    """The command line of an archived script (benchmarks/archive/): prints ``run``'s markdown."""
-    parser = argparse.ArgumentParser(description=description)
-    parser.add_argument("--quick", action="store_true", help="small sizes, a smoke test")
-    parser.add_argument("--out", default="jaxcontact-bench", help="folder for CSV and PNG")
-    parser.add_argument("--repeats", type=int, default=None, help="timed runs per method")
-    if slow:
-        parser.add_argument("--slow", type=float, default=None, help="s: time slower ones once")
-    args = parser.parse_args(argv)
-    reuse_pages()  # every peer at its best (benchmarks/archive/malloc.py)
-    jax.config.update("jax_enable_x64", True)  # float64 scenes and variants beside float32
-    options = {"slow_s": args.slow} if slow else {}
-    print(run(args.quick, args.out, args.repeats, **options))
-    return 0
 
 
 def suite(name, run, draw, description, argv=None, *, options=()) -> int:

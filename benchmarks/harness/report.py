@@ -63,24 +63,33 @@ def _commit() -> str:
     return commit + ("+changes" if dirty else "")
 
 
-def _machine() -> str:
-    cpu, memory = platform.processor() or platform.machine(), "memory unknown"
+def cpu() -> str:
+    """The CPU's model name, with its family and model: "AMD EPYC" alone has named machines
+    whose speeds differed 3x."""
+    name = platform.processor() or platform.machine()
     try:
         with open("/proc/cpuinfo") as info:
             fields = {}
             for line in info:
                 key, _, value = line.partition(":")
                 fields.setdefault(key.strip(), value.strip())
-        cpu = fields.get("model name", cpu)
-        # "AMD EPYC" alone has named machines whose speeds differed 3x.
-        if "cpu family" in fields:
-            cpu += f" (family {fields['cpu family']}, model {fields.get('model', '?')})"
+    except OSError:
+        return name
+    name = fields.get("model name", name)
+    if "cpu family" in fields:
+        name += f" (family {fields['cpu family']}, model {fields.get('model', '?')})"
+    return name
+
+
+def _machine() -> str:
+    memory = "memory unknown"
+    try:
         with open("/proc/meminfo") as info:
             kib = int(next(line.split()[1] for line in info if line.startswith("MemTotal")))
             memory = f"{kib / 2**20:.0f} GiB"
     except (OSError, StopIteration):
         pass
-    return f"{cpu}; {os.cpu_count()} cores; {memory}"
+    return f"{cpu()}; {os.cpu_count()} cores; {memory}"
 
 
 def _allowed() -> list[int] | None:

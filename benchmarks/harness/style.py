@@ -32,7 +32,6 @@ Example:
 from __future__ import annotations
 
 import colorsys
-import csv
 import re
 
 # jaxcontact's own forms: solid lines, filled markers, cool colours.
@@ -297,21 +296,3 @@ def count_axis(axes, top: float) -> None:
     axes.yaxis.set_major_locator(FixedLocator([0, *(10**k for k in range(decades + 1))]))
     axes.yaxis.set_major_formatter(FuncFormatter(lambda value, _: f"{value:,.0f}"))
     axes.yaxis.set_minor_locator(NullLocator())
-
-
-def read_rows(path) -> list[dict]:
-    """A benchmark's stored CSV as the rows its plot function takes: numbers as ``int`` or
-    ``float``, empty cells as ``""``, the rest as text (to redraw a figure without a rerun)."""
-
-    def number(text):
-        for kind in (int, float):
-            try:
-                return kind(text)
-            except ValueError:
-                pass
-        return text
-
-    with open(path, newline="") as stream:
-        return [
-            {key: number(value) for key, value in row.items()} for row in csv.DictReader(stream)
-        ]
