@@ -109,6 +109,11 @@ def ms(seconds) -> float:
     return round(seconds * 1e3, 4)
 
 
+def spread(timing) -> tuple:
+    """A timing's ``median ms``, ``p10 ms`` and ``p90 ms`` cells, the columns every table has."""
+    return ms(timing.median_s), ms(timing.p10_s), ms(timing.p90_s)
+
+
 def bodies_table(rows, repeats: int, warmup: int) -> dict:
     """The bodies' rows: time, its ratio to the part's comparator, compile, the checks."""
     columns = (
@@ -125,9 +130,7 @@ def bodies_table(rows, repeats: int, warmup: int) -> dict:
         (
             entry["scene"],
             entry["method"],
-            ms(entry["timing"].median_s),
-            ms(entry["timing"].p10_s),
-            ms(entry["timing"].p90_s),
+            *spread(entry["timing"]),
             round(entry["ratio"], 3),
             None if entry["compile"] is None else round(entry["compile"], 2),
             features.verdict(entry["checks"]),
@@ -163,9 +166,7 @@ def steps_table(rows, repeats: int, warmup: int) -> dict:
             entry["scene"],
             entry["form"],
             entry["method"],
-            ms(entry["timing"].median_s),
-            ms(entry["timing"].p10_s),
-            ms(entry["timing"].p90_s),
+            *spread(entry["timing"]),
             round(entry["ratio"], 3),
             round(entry["compile"], 2),
             features.verdict(entry["checks"]),
@@ -205,9 +206,7 @@ def pieces_table(pieces) -> dict:
             piece["scene"],
             piece["form"],
             piece["piece"],
-            ms(piece["timing"].median_s),
-            ms(piece["timing"].p10_s),
-            ms(piece["timing"].p90_s),
+            *spread(piece["timing"]),
             round(piece["timing"].median_s / piece["plain_s"], 3),
             round(piece["timing"].compile_s, 2),
         )
