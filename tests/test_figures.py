@@ -17,6 +17,7 @@ matplotlib.use("Agg")
 
 import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib.colors import to_hex  # noqa: E402
+from matplotlib.container import ErrorbarContainer  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
 from benchmarks.harness import report, style  # noqa: E402
@@ -39,14 +40,17 @@ def drawn(monkeypatch):
 
 
 def _series(figure, name=lambda label: label):
-    """``series -> set of colours`` over every labelled line of ``figure``; ``name(label)``
-    the series a line's label belongs to."""
+    """``series -> set of colours`` over every labelled line of ``figure`` (an error bar's
+    label is its container's, its colour its data line's); ``name(label)`` the series a
+    line's label belongs to."""
     colours = {}
     for axes in figure.axes:
-        for line in axes.lines:
-            if not line.get_label().startswith("_"):
-                series = name(line.get_label())
-                colours.setdefault(series, set()).add(to_hex(line.get_color()))
+        labelled = [(line.get_label(), line) for line in axes.lines]
+        errorbars = [bars for bars in axes.containers if isinstance(bars, ErrorbarContainer)]
+        labelled += [(bars.get_label(), bars.lines[0]) for bars in errorbars]
+        for label, line in labelled:
+            if not label.startswith("_"):
+                colours.setdefault(name(label), set()).add(to_hex(line.get_color()))
     return colours
 
 
@@ -96,14 +100,14 @@ def test_the_table_gives_each_series_its_own_look():
 @pytest.mark.parametrize("path", report.stored(), ids=lambda p: str(p.relative_to(RESULTS)))
 def test_every_stored_figure_draws_each_method_in_its_one_look(path, drawn):
     """Each stored record's figure, drawn again from its JSON: every labelled series is a
-    method or guide of the style table, in that table's colour, and no two share one."""
+    method or guide of the style table, in that table's colour; and ``_check``'s rules (no two
+    series share a colour, legends off the data, no negative tick)."""
     rec = report.load(path)
     figure = importlib.import_module(f"benchmarks.{rec['suite']}").draw(rec, plt)
-    colours = _series(figure, style.canonical)
-    for name, (colour,) in colours.items():
+    _check(figure, name=style.canonical)
+    for name, (colour,) in _series(figure, style.canonical).items():
         assert name in style.STYLES, f"{path.name}: {name!r} is not in the style table"
         assert colour == style.STYLES[name][0], f"{path.name}: {name!r} drawn in {colour}"
-    assert len({c for (c,) in colours.values()}) == len(colours)
     plt.close(figure)
 
 
