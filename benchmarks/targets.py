@@ -18,6 +18,9 @@ default, every call ended by ``block_until_ready``; median and 10th-90th percent
   - **reused state** (``skin = radius / 2``, every call on the allocation's positions): the
     skin check, then the narrow phase on the candidates kept since ``allocate``. It is a
     simulation's step while nothing has moved a skin.
+- on an accelerator, where the cell search runs in tiles (``narrow.tiled``), the whole search
+  with the cell lists searched in chunks instead, the CPU's design, as its baseline
+  (``CHUNKED``; scenes with cells only);
 - the hand-written numba grid (``benchmarks.peer_codes.numba_grid``) on one thread, and on
   two (``prange``) unless the process is pinned to one core. It is built and searched on
   every call; it compiles once per dtype (a note gives the time).
@@ -62,6 +65,7 @@ from benchmarks.harness import _run, program, report
 from benchmarks.harness.timing import compiled_call, time_interleaved
 from benchmarks.peer_codes import baselines
 from jaxcontact import Pairs, Search
+from jaxcontact._pipeline import narrow
 from jaxcontact.scenes import curling_chip, cutting_scene, rough_die_scene
 
 FULL = (
@@ -87,6 +91,9 @@ WHOLE_COMPACT = "Search.closest (compact, whole search)"
 REUSED = "Search.closest (reused state)"
 REUSED_COMPACT = "Search.closest (compact, reused state)"
 SEARCHES = (WHOLE, WHOLE_COMPACT, REUSED, REUSED_COMPACT)
+# On an accelerator, where the cell search runs in tiles: the whole search with the cell
+# lists searched in chunks instead (``narrow.tiled``), the design the CPU keeps.
+CHUNKED = "Search.closest (whole search, cell lists in chunks)"
 NUMBA = "numba grid (1 thread)"
 NUMBA2 = "numba grid (prange, 2 threads)"
 PEERS = (NUMBA, NUMBA2)
@@ -203,8 +210,20 @@ def run_scene(kind: str, size: int, parameter, repeats: int, peers=None) -> dict
     """
     x, surface, radius, pair = build(kind, size, parameter)
     calls, compile_s, shapes, skipped = {}, {}, {}, {}
-    for name, (jitted, args) in search_steps(x, surface, radius, pair).items():
-        compiled, compile_s[name] = compiled_call(jitted, args)
+    steps = search_steps(x, surface, radius, pair)
+    if narrow.tiled() and steps[WHOLE][1][0].sizes.use_cells:
+        steps[CHUNKED] = step(Search(radius=radius, skin=0.0), x, surface, pair)
+    chosen = narrow.TILED
+    for name, (jitted, args) in steps.items():
+        narrow.TILED = False if name == CHUNKED else chosen
+        if name == CHUNKED:
+            jax.clear_caches()  # the inner jitted stages were traced with the tiles
+        try:
+            compiled, compile_s[name] = compiled_call(jitted, args)
+        finally:
+            narrow.TILED = chosen
+            if name == CHUNKED:
+                jax.clear_caches()
         shapes[name] = program.describe(compiled)
         calls[name] = (compiled, args)
     for name in PEERS if peers is None else peers:
@@ -296,7 +315,7 @@ def tables(rows: list[dict]) -> list[dict]:
             None if row["bytes_accessed"] is None else row["bytes_accessed"] / row["minimum_bytes"],
         ]
         for row in rows
-        if row["method"] in SEARCHES
+        if row["method"] in (*SEARCHES, CHUNKED)
     ]
     return [
         report.table(
@@ -388,7 +407,7 @@ def draw(record, plt):
             [r["p90_ms"] - r["median_ms"] for r in mine.values()],
         ]
         timed.errorbar(median, at, xerr=spread, **{**looks, "linestyle": "none"}, label=method)
-        if method in SEARCHES:
+        if method in (*SEARCHES, CHUNKED):
             compile_s = [r["compile_s"] for r in mine.values()]
             compiled.plot(compile_s, at, **{**looks, "linestyle": "none"})
             ratio = [

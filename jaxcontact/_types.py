@@ -184,6 +184,9 @@ class Sizes:
       buckets: 0 gives each of the ``grid_shape`` cells its own list; more
         hashes the cells into that many lists (a grid of that many more
         cells than slaves would otherwise need wider cells).
+      tile_capacity: most tiles of the cell search (``TILE`` kept slaves
+        of one cell's list each); 0 gives one per kept slave, which cannot
+        overflow.
       contact_capacity: entries of the compact result (``ContactList``,
         ``Search(compact=True)``); 0 (the default) returns the N-row form,
         a ``Contact`` of N rows.
@@ -201,6 +204,7 @@ class Sizes:
     chunk_rows: int = CHUNK_ROWS
     contact_capacity: int = 0
     buckets: int = 0
+    tile_capacity: int = 0
 
     def __post_init__(self):
         if isinstance(self.buckets, bool) or not isinstance(self.buckets, int) or self.buckets < 0:

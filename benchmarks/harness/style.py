@@ -49,6 +49,7 @@ JAXCONTACT = {
     "Search.swept": ("#0570b0", "p"),
     "Search.closest (whole search)": ("#8073ac", "o"),
     "Search.closest (compact, whole search)": ("#2d004b", "s"),
+    "Search.closest (whole search, cell lists in chunks)": ("#dd3497", "H"),
     # benchmarks/simulations.py: the cutting runs.
     "simulation, 400x mass": ("#08519c", "o"),
     "simulation, 200x mass": ("#41ab5d", "s"),

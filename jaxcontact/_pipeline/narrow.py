@@ -21,6 +21,7 @@ from jaxcontact._pipeline.lowest import UNROLL, lowest_in_blocks, lowest_score
 from jaxcontact._pipeline.pairs import pick
 from jaxcontact._pipeline.segments import Segments
 from jaxcontact._pipeline.sort import stable_order
+from jaxcontact._pipeline.tiles import tile
 from jaxcontact._types import Array, Sizes
 
 # Up to this many pairs, ``search_all`` scores the whole plane at once (``_lowest_in_plane``).
@@ -172,6 +173,53 @@ def search_listed(kernel, rows, segments: Segments, listed: CellLists, sizes: Si
     return choice, jnp.full((num_rows,), jnp.inf, dtype).at[order].set(best[:num_rows])
 
 
+def search_tiles(kernel, rows, segments: Segments, listed: CellLists, sizes: Sizes):
+    """``((i32[S], f[S]), bool[])``: each kept slave against the segments of
+    its cell, at most ``sizes.cell_capacity``; the choice, its score, and
+    whether the tiles overflowed (``tiles``).
+
+    One pass over ``(tiles, cell_capacity, TILE)`` pairs: each tile's
+    segments are gathered once for its ``TILE`` slaves, and the scores are
+    reduced along the segments, which XLA's CPU code vectorises across the
+    tile's slaves. Each list holds its segments in increasing order, so the
+    first lowest slot (``argmin``) is the lower segment, as every search
+    breaks ties. ``kernel(*row, row_tags, segment)`` scores a pair
+    (``pairs.ruled``); ``rows`` are the kept slaves' f[S, ...] arrays.
+    """
+    num_rows, capacity = listed.first.shape[0], sizes.cell_capacity
+    dtype = segments.start.dtype
+    num_tiles = sizes.tile_capacity or num_rows
+    tiled = tile(listed, capacity, num_tiles)
+    slot = jnp.arange(capacity, dtype=jnp.int32)
+    # i32[K, C]: each tile's segments, -1 past its list.
+    entry = jnp.minimum(tiled.first[:, None] + slot[None, :], max(listed.order.shape[0] - 1, 0))
+    listed_ok = slot[None, :] < tiled.count[:, None]
+    segment = jnp.where(listed_ok, listed.order[entry], -1) if listed.order.shape[0] else entry
+    index = jnp.maximum(segment, 0)
+    # Reused lists may name a segment masked or degenerate since.
+    listed_ok = listed_ok & segments.ok[index]
+    edges = (edge(segments.start[index], segments.end[index]), pick(segments.tags, index))
+    at = jnp.minimum(tiled.rows, num_rows - 1)
+    tile_rows = jax.tree.map(lambda values: values[at], rows)
+
+    def per_tile(tile_rows, edges):
+        # f[C, TILE]: the tile's slaves against its segments.
+        def per_segment(one):
+            return jax.vmap(kernel, in_axes=(0,) * len(tile_rows) + (None,))(*tile_rows, one)
+
+        return jax.vmap(per_segment)(edges)
+
+    values = jax.vmap(per_tile)(tile_rows, edges)
+    values = jnp.where(listed_ok[:, :, None] & ~jnp.isnan(values), values, jnp.inf).astype(dtype)
+    best_slot = jnp.argmin(values, axis=1)
+    best = jnp.min(values, axis=1)
+    chosen = jnp.take_along_axis(segment, best_slot, axis=1)
+    chosen = jnp.where(best < jnp.inf, chosen, -1)
+    choice = jnp.full((num_rows,), -1, jnp.int32).at[tiled.rows].set(chosen, mode="drop")
+    score = jnp.full((num_rows,), jnp.inf, dtype).at[tiled.rows].set(best, mode="drop")
+    return (choice, score), tiled.needed > num_tiles
+
+
 def choose(queries: Queries, segments: Segments, boxes: Box, kernel, sizes: Sizes, listed=None):
     """``((i32[S], f[S]), bool[])``: the chosen segment of each kept slave and
     its score, and whether the cells overflowed.
@@ -187,7 +235,30 @@ def choose(queries: Queries, segments: Segments, boxes: Box, kernel, sizes: Size
     overflow = jnp.zeros((), bool)
     if listed is None:
         listed, overflow = list_candidates(queries.query, queries.ok, segments, boxes, sizes)
-    return search_listed(kernel, queries.rows, segments, listed, sizes), overflow
+    if not tiled():
+        return search_listed(kernel, queries.rows, segments, listed, sizes), overflow
+    chosen, too_many = search_tiles(kernel, queries.rows, segments, listed, sizes)
+    return chosen, overflow | too_many
+
+
+# Which cell search runs: None lets the backend decide (``tiled``); tests and
+# benchmarks set True or False to run either on any backend.
+TILED = None
+
+
+def tiled() -> bool:
+    """Whether the cell search runs in tiles (``search_tiles``) or by list length in chunks
+    (``search_listed``).
+
+    Both give the same answers. On the CPU the chunks are faster: XLA's CPU
+    code scores a pair in 4.6-7 ns however the pairs are laid out (measured
+    with the repository's benchmarks/targets.py), so the work a search does
+    decides its time, and the chunks run each list only as far as it is
+    long, where a tile runs the capacity. On an accelerator the chunks' loop
+    of dependent steps, each a few kernels, is what costs, and the tiles'
+    one wide pass is what it is built for.
+    """
+    return jax.default_backend() != "cpu" if TILED is None else TILED
 
 
 def vmapped(kernel, *rows):

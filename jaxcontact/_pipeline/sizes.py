@@ -29,8 +29,9 @@ from jaxcontact._pipeline.broad import (
     enclosing,
     segment_boxes,
 )
-from jaxcontact._pipeline.cells import Grid, bin_segments
+from jaxcontact._pipeline.cells import Grid, bin_segments, cell_of, flat_cell
 from jaxcontact._pipeline.placement import searched_whole
+from jaxcontact._pipeline.tiles import TILE
 from jaxcontact._types import CELLS_ABOVE, CHUNK_ROWS, Array, Sizes, Surface
 
 
@@ -139,10 +140,14 @@ def _cells_for(extent, edge: float, num_kept: int, slack: float, chosen: bool):
 
 
 @functools.partial(jax.jit, static_argnames=("shape", "span", "buckets"))
-def _fullest_cell(boxes: Box, ok: Array, grid: Grid, shape, span, buckets) -> Array:
-    """i32[]: the most segments in one cell's list."""
+def _cell_load(boxes: Box, ok: Array, grid: Grid, points: Array, shape, span, buckets):
+    """``(i32[] most segments in one cell's list, i32[] tiles the points need)``."""
     bins = bin_segments(boxes, ok, grid, shape, span, ok.shape[0], buckets)
-    return jnp.max(bins.count, initial=0)
+    lists = flat_cell(cell_of(points, grid, shape), shape, buckets)
+    lists = jnp.where(bins.count[lists] > 0, lists, bins.count.shape[0] - 1)
+    per_list = jax.ops.segment_sum(jnp.ones_like(lists), lists, bins.count.shape[0])
+    tiles = jnp.sum((per_list[:-1] + TILE - 1) // TILE)
+    return jnp.max(bins.count, initial=0), tiles
 
 
 def measure(
@@ -248,8 +253,8 @@ def measure(
     if layout is not None:
         span = tuple(map(max, span, layout.span))
     grid = Grid(jnp.asarray(low, x.dtype), jnp.asarray(cell, x.dtype))
-    most_per_cell = int(
-        _fullest_cell(measured.boxes, measured.segment_ok, grid, grid_shape, span, buckets)
+    most_per_cell, num_tiles = _cell_load(
+        measured.boxes, measured.segment_ok, grid, jnp.asarray(points), grid_shape, span, buckets
     )
     return Sizes(
         num_slaves=num_rows,
@@ -260,8 +265,9 @@ def measure(
         grid_shape=grid_shape,
         cell_size=float(edge),
         span=span,
-        cell_capacity=grow(most_per_cell, slack),
+        cell_capacity=grow(int(most_per_cell), slack),
         chunk_rows=chunk_rows,
+        tile_capacity=grow(int(num_tiles), slack),
         buckets=buckets,
     )
 
@@ -282,6 +288,7 @@ def largest(first: Sizes, second: Sizes) -> Sizes:
         cell_capacity=max(first.cell_capacity, second.cell_capacity),
         contact_capacity=max(first.contact_capacity, second.contact_capacity),
         buckets=max(first.buckets, second.buckets),
+        tile_capacity=max(first.tile_capacity, second.tile_capacity),
     )
 
 
