@@ -273,6 +273,90 @@ def run_scene(kind: str, size: int, parameter, repeats: int, peers=None) -> dict
     return {"rows": rows, "skipped": skipped}
 
 
+STAGE_COLUMNS = (
+    "scene",
+    "kept slaves",
+    "with a list",
+    "cull ms",
+    "binning ms",
+    "pairs (chunks)",
+    "chunks ms",
+    "ns / pair (chunks)",
+    "pairs (tiles)",
+    "tiles ms",
+    "ns / pair (tiles)",
+    "numba grid ms",
+)
+
+
+def stage_row(kind: str, size: int, parameter, repeats: int) -> dict | None:
+    """Where the whole search's time goes on a scene with cells, stage by stage (the reason
+    for target 1's misses): the cull with the kept rows, the binning of the segments into
+    cell lists, and the narrow phase both ways, the chunks (the CPU's) and the tiles (an
+    accelerator's), each its own jitted program at the scene's allocated sizes, timed
+    interleaved with the numba grid's whole query. Pairs: those each narrow phase scores
+    (the chunks: every kept slave's list, as long as it is; the tiles: every tile's list to
+    the cell capacity, for its 8 slots). The plain closest kernel (no pair rule), so the
+    chip's rows are a bound for its ruled search. None on a scene without cells."""
+    from benchmarks.harness import internals
+
+    x, surface, radius, pair = build(kind, size, parameter)
+    sizes = Search(radius=radius).allocate(x, surface, **pair).sizes
+    if not sizes.use_cells:
+        return None
+    reach = jax.numpy.asarray(radius, x.dtype)
+
+    @jax.jit
+    def cull(x, surface):
+        found = internals.segments.resolve_segments(surface)
+        boxes, blocks = internals.broad_phase(
+            x, x, None, found, reach, sizes.block_size, sizes.block_capacity
+        )
+        (kept,), ok = internals.kept_rows(blocks, None, x)
+        return found, boxes, kept, ok
+
+    found, boxes, kept, ok = cull(x, surface)
+
+    @jax.jit
+    def binning(kept, ok, found, boxes):
+        return internals.list_candidates(kept, ok, found, boxes, sizes)[0]
+
+    listed = binning(kept, ok, found, boxes)
+    kernel = internals.ruled(internals.CLOSEST.kernel, None)
+    chunks = jax.jit(lambda *a: internals.search_listed(kernel, (a[0], None), *a[1:], sizes))
+    tiles = jax.jit(lambda *a: internals.search_tiles(kernel, (a[0], None), *a[1:], sizes)[0])
+    numba = numba_closest(x, surface, radius)
+    calls = {
+        "cull": (cull, (x, surface)),
+        "binning": (binning, (kept, ok, found, boxes)),
+        "chunks": (chunks, (kept, found, listed)),
+        "tiles": (tiles, (kept, found, listed)),
+    }
+    if not isinstance(numba, str):
+        calls[NUMBA] = numba
+    timings = time_interleaved(calls, repeats=repeats)
+    count = np.minimum(np.asarray(listed.count), sizes.cell_capacity)
+    tile_pairs = sizes.tile_capacity * sizes.cell_capacity * 8
+
+    def ms(name):
+        return timings[name].median_s * 1e3 if name in timings else None
+
+    return {
+        "scene": label(kind, size, parameter),
+        "kept slaves": int(np.sum(np.asarray(ok))),
+        "with a list": int(np.sum(count > 0)),
+        "cull ms": ms("cull"),
+        "binning ms": ms("binning"),
+        "pairs (chunks)": int(count.sum()),
+        "chunks ms": ms("chunks"),
+        "ns / pair (chunks)": ms("chunks") * 1e6 / max(int(count.sum()), 1),
+        "pairs (tiles)": tile_pairs,
+        "tiles ms": ms("tiles"),
+        "ns / pair (tiles)": ms("tiles") * 1e6 / tile_pairs,
+        "numba grid ms": ms(NUMBA),
+    }
+
+
 def _program_fields(shape: program.Shape) -> dict:
     return {
         "kernels": shape.kernels,
@@ -338,28 +422,42 @@ def tables(rows: list[dict]) -> list[dict]:
     ]
 
 
+def stage_tables(stages) -> list[dict]:
+    """The stage table (``stage_row``), where stages were measured (on the CPU)."""
+    if not stages:
+        return []
+    note = (
+        "Each stage its own jitted program at the scene's sizes, the plain closest kernel; "
+        "medians of interleaved runs with the numba grid's whole query (1 thread). pairs: "
+        "those each narrow phase scores; ns / pair: its time over them."
+    )
+    title = "Where the whole search's time goes, on the scenes with cells"
+    return [report.table(STAGE_COLUMNS, stages, title=title, note=note)]
+
+
 def run(args) -> dict:
     repeats = args.repeats or (10 if args.quick else 40)
     scenes = QUICK if args.quick else FULL
     x64 = jax.config.jax_enable_x64
     # A float32 simulation runs with x64 off: indices and weak scalars 32-bit, its programs.
     jax.config.update("jax_enable_x64", False)
-    rows, skipped = [], {}
+    rows, skipped, stages = [], {}, []
     try:
         for done, scene in enumerate(scenes, 1):
             found = run_scene(*scene, repeats)
             rows += found["rows"]
             skipped |= found["skipped"]
+            if not narrow.tiled():
+                stages += [row for row in [stage_row(*scene, repeats)] if row]
             if done < len(scenes):
-                _run.keep_partial(
-                    "targets", args, _found(rows, skipped, repeats, f"{done} of {len(scenes)}")
-                )
+                partial = f"{done} of {len(scenes)}"
+                _run.keep_partial("targets", args, _found(rows, skipped, repeats, partial, stages))
     finally:
         jax.config.update("jax_enable_x64", x64)
-    return _found(rows, skipped, repeats)
+    return _found(rows, skipped, repeats, stages=stages)
 
 
-def _found(rows, skipped, repeats, partial=None) -> dict:
+def _found(rows, skipped, repeats, partial=None, stages=()) -> dict:
     notes = [
         f"float32; median of {repeats} interleaved rounds after 2 warm-up runs, compile apart."
     ]
@@ -376,8 +474,8 @@ def _found(rows, skipped, repeats, partial=None) -> dict:
         notes.insert(0, f"Partial: {partial} scenes.")
     return {
         "title": "Search.closest beside the numba grid, scene by scene (issue 25's targets)",
-        "tables": tables(rows),
-        "data": {"rows": rows, "target_compile_s": TARGET_COMPILE_S},
+        "tables": tables(rows) + stage_tables(stages),
+        "data": {"rows": rows, "target_compile_s": TARGET_COMPILE_S, "stages": list(stages)},
         "notes": notes,
     }
 

@@ -24,7 +24,7 @@ from jaxcontact._pipeline import outline as _outline
 from jaxcontact._pipeline.broad import broad_phase, kept_rows, segment_boxes
 from jaxcontact._pipeline.cells import Grid, cell_entries, list_candidates, num_lists
 from jaxcontact._pipeline.geometry import squared_distance
-from jaxcontact._pipeline.narrow import search_all, search_listed, vmapped
+from jaxcontact._pipeline.narrow import search_all, search_listed, search_tiles, vmapped
 from jaxcontact._pipeline.pairs import EVERY_PAIR, ruled
 from jaxcontact._pipeline.sizes import largest, measure, measure_batch, with_entries
 from jaxcontact._pipeline.sort import packs, sorted_pairs, stable_order
@@ -137,6 +137,7 @@ __all__ = [
     "ruled",
     "search_all",
     "search_listed",
+    "search_tiles",
     "segment_boxes",
     "shard_rows",
     "sized_jit",
