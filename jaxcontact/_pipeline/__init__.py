@@ -9,7 +9,8 @@
 5. ``broad``: the cull of blocks of slaves against the master's box.
 6. ``cells`` (with ``sort``): the segments binned into cells; ``candidates``
    keeps the cull and the binning across steps (the skin rule).
-7. ``narrow`` (with ``lowest``): each row's lowest-scoring pair.
+7. ``narrow`` (with ``lowest``, and ``tiles`` on an accelerator): each
+   row's lowest-scoring pair.
 8. ``writeback``: results into N rows or K entries.
 
 ``driver`` runs a query (``jaxcontact._query``) down these stages, once for
