@@ -45,10 +45,10 @@ picked the other segment at a vertex for 1 slave, the two gaps equal to 2e-9 in 
 two programs round the pair distance in differently fused loops). The numba grid's answer
 equals it on ``found`` and ``segment`` but for exact vertex ties (its rule is the lower
 index). On the self-contact scene (``scenes.curling_chip``: every node of the chip's outline
-is a slave, ``Pairs(slave_node, self_contact=True)``) the numba grid has no pair rule: it
-answers the plain query over the same nodes and segments, where every node finds its own
-segments, so its time is a lower bound for a grid that applied the rule, and its answer is
-not compared.
+is a slave, ``Pairs(slave_node, self_contact=True)``) the numba grid applies the same rule
+(``numba_grid.closest(pairs=...)``: no segment through the slave's own node, none within four
+radii of it along its outline, the arc lengths computed at every call as its grid is), and its
+answer is compared like the others.
 """
 
 from __future__ import annotations
@@ -160,11 +160,19 @@ def whole_search_steps(x, surface, radius, pair) -> dict:
     return {"dense": steps[WHOLE], "compact": steps[WHOLE_COMPACT]}
 
 
-def numba_closest(x, surface, radius, threads: int = 1):
+def numba_closest(x, surface, radius, threads: int = 1, pair=None):
     """The numba grid's closest query on ``threads``: ``_run.numba_peer``'s
-    ``(fn, args)``, or why it cannot run (a str)."""
+    ``(fn, args)``, or why it cannot run (a str). ``pair``: the scene's pair-rule keywords
+    ({} or None for none), given to the numba grid as its own rule."""
     start, end = _run.endpoints(surface)
-    return _run.numba_peer("closest", threads, x.dtype, (np.asarray(x), start, end), radius=radius)
+    rule = None
+    if pair:
+        pairs = pair["pairs"]
+        segments = np.asarray(surface.segments)
+        nodes = len(np.asarray(surface.nodes))
+        rule = (np.asarray(pairs.slave_node), segments, nodes, pairs.self_contact)
+    args = (np.asarray(x), start, end)
+    return _run.numba_peer("closest", threads, x.dtype, args, radius=radius, pairs=rule)
 
 
 def _rows(result, num_rows: int):
@@ -228,8 +236,9 @@ def run_scene(kind: str, size: int, parameter, repeats: int, peers=None) -> dict
         calls[name] = (compiled, args)
     for name in PEERS if peers is None else peers:
         # The peers of peers.py: not installed, or more threads than cores allowed, a note.
-        peer = baselines.unavailable(name) or baselines.PEERS[name][1](
-            np.asarray(x), *_run.endpoints(surface), radius
+        # The numba grid applies the scene's pair rule too.
+        peer = baselines.unavailable(name) or numba_closest(
+            x, surface, radius, 2 if name == NUMBA2 else 1, pair
         )
         if isinstance(peer, str):
             skipped[name] = peer
@@ -244,8 +253,6 @@ def run_scene(kind: str, size: int, parameter, repeats: int, peers=None) -> dict
         fn, args = calls[name]
         if name in shapes:
             check = search_check(_rows(fn(*args), len(x)), reference)
-        elif pair:
-            check = "plain query (no pair rule)"
         else:
             check = numba_check(fn(*args), reference)
         shape = shapes.get(name)

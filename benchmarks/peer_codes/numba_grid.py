@@ -127,8 +127,136 @@ def _kernels():
         return ox * ox + oy * oy, ox * dy - oy * dx
 
     @njit
-    def closest_rows(part, parts, x, start, end, radius, grid, first, items, segment, gap, found):
-        """Fills the rows of blocks ``part, part + parts, ...`` of ``(segment, gap, found)``."""
+    def allowed(node, k, indices, seg_chain, low, high, loop, node_chain, node_arc, selfc, window):
+        """Whether slave node ``node`` may meet segment ``k`` (jaxcontact's pair rule,
+        ``jaxcontact/_pipeline/pairs.py``): never a segment through its own node; with
+        self-contact, not one within ``window`` of it along its own outline."""
+        if indices[k, 0] == node or indices[k, 1] == node:
+            return False
+        if not selfc or node >= node_chain.shape[0] or node_chain[node] < 0:
+            return True
+        if node_chain[node] != seg_chain[k]:
+            return True
+        at = node_arc[node]
+        direct = max(max(low[k] - at, at - high[k]), 0.0)
+        around = at + (loop[k] - high[k]) if at < low[k] else (loop[k] - at) + low[k]
+        return min(direct, around) >= window
+
+    @njit
+    def outline_arcs(indices, start, end, num_nodes):
+        """The arc coordinates the self-contact window reads, as jaxcontact defines them
+        (``jaxcontact/_pipeline/outline.py``: a segment is followed by the lowest other one
+        starting at its end node; a loop is cut open before its lowest segment; ``u`` runs
+        from a chain's end back to its start), by walking each chain once. For outlines whose
+        nodes join at most two segments, every segment real.
+
+        Returns ``(chain, low, high, loop)`` per segment and ``(node_chain, node_arc)`` per node.
+        """
+        m = indices.shape[0]
+        lowest_start = np.full(num_nodes, -1, np.int64)
+        next_start = np.full(num_nodes, -1, np.int64)
+        for j in range(m):
+            s = indices[j, 0]
+            if lowest_start[s] < 0:
+                lowest_start[s] = j
+            elif next_start[s] < 0:
+                next_start[s] = j
+        after = np.empty(m, np.int64)
+        length = np.empty(m)
+        for k in range(m):
+            j = lowest_start[indices[k, 1]]
+            after[k] = next_start[indices[k, 1]] if j == k else j
+            dx = np.float64(end[k, 0]) - np.float64(start[k, 0])
+            dy = np.float64(end[k, 1]) - np.float64(start[k, 1])
+            length[k] = np.sqrt(dx * dx + dy * dy)
+        # Loops: walk from each segment not yet seen; meeting the walk's own stamp closes a
+        # loop, which is cut before its lowest segment and measured.
+        loop = np.full(m, np.inf)
+        stamp = np.full(m, -1, np.int64)
+        for k0 in range(m):
+            k = k0
+            while k >= 0 and stamp[k] < 0:
+                stamp[k] = k0
+                k = after[k]
+            if k >= 0 and stamp[k] == k0:
+                lowest, total, j = k, 0.0, k
+                while True:
+                    lowest = min(lowest, j)
+                    total += length[j]
+                    j = after[j]
+                    if j == k:
+                        break
+                j = k
+                while True:
+                    loop[j] = total
+                    if after[j] == lowest:
+                        nxt = after[j]
+                        after[j] = -1
+                        j = nxt
+                    else:
+                        j = after[j]
+                    if j == k:
+                        break
+        # Suffix sums along each chain, from its head (a segment no other one leads to).
+        led = np.zeros(m, np.bool_)
+        for k in range(m):
+            if after[k] >= 0:
+                led[after[k]] = True
+        chain = np.empty(m, np.int64)
+        arc = np.empty(m)
+        path = np.empty(m, np.int64)
+        for head in range(m):
+            if led[head]:
+                continue
+            count, k = 0, head
+            while k >= 0:
+                path[count] = k
+                count += 1
+                k = after[k]
+            last, total = path[count - 1], 0.0
+            for i in range(count - 1, -1, -1):
+                total += length[path[i]]
+                arc[path[i]] = total
+                chain[path[i]] = last
+        node_chain = np.full(num_nodes, -1, np.int64)
+        node_arc = np.zeros(num_nodes)
+        for k in range(m):
+            node_chain[indices[k, 1]] = chain[k]
+            node_arc[indices[k, 1]] = arc[k] - length[k]
+        for k in range(m):
+            node_chain[indices[k, 0]] = chain[k]
+            node_arc[indices[k, 0]] = arc[k]
+        return chain, arc - length, arc, loop, node_chain, node_arc
+
+    @njit
+    def outline_rule(slave_node, indices, start, end, num_nodes, window):
+        """The rule's arrays for ``closest_rows``: no rule where ``slave_node`` is empty."""
+        if slave_node.shape[0] == 0 or window <= 0.0:
+            empty_f, empty_i = np.zeros(0), np.zeros(0, np.int64)
+            return (
+                slave_node,
+                indices,
+                empty_i,
+                empty_f,
+                empty_f,
+                empty_f,
+                empty_i,
+                empty_f,
+                window,
+            )
+        chain, low, high, loop, node_chain, node_arc = outline_arcs(indices, start, end, num_nodes)
+        return slave_node, indices, chain, low, high, loop, node_chain, node_arc, window
+
+    @njit
+    def closest_rows(
+        part, parts, x, start, end, radius, grid, first, items, rule, segment, gap, found
+    ):
+        """Fills the rows of blocks ``part, part + parts, ...`` of ``(segment, gap, found)``.
+
+        ``rule``: ``outline_rule``'s tuple; a pair it forbids is never scored."""
+        slave_node, indices, seg_chain, low, high, loop, node_chain, node_arc, window = rule
+        own = slave_node.shape[0] > 0
+        self_contact = window > 0.0
         origin_x, origin_y, cell, top_x, top_y = grid[0], grid[1], grid[2], grid[3], grid[4]
         nx, ny = int(grid[5]), int(grid[6])
         limit = radius * radius
@@ -143,8 +271,23 @@ def _kernels():
                     continue
                 c = cell_index(py, origin_y, cell, ny) * nx + cell_index(px, origin_x, cell, nx)
                 best, best_k, best_cross = np.inf, -1, 0.0
+                node = slave_node[row] if own else -1
                 for entry in range(first[c], first[c + 1]):
                     k = items[entry]
+                    if node >= 0 and not allowed(
+                        node,
+                        k,
+                        indices,
+                        seg_chain,
+                        low,
+                        high,
+                        loop,
+                        node_chain,
+                        node_arc,
+                        self_contact,
+                        window,
+                    ):
+                        continue
                     ax, ay = np.float64(start[k, 0]), np.float64(start[k, 1])
                     bx, by = np.float64(end[k, 0]), np.float64(end[k, 1])
                     distance_squared, cross = project(px, py, ax, ay, bx, by)
@@ -334,21 +477,25 @@ def _kernels():
     # One numba call per query, grid included: the set-up on the host in NumPy
     # cost 30 us a call more (10 small NumPy calls and three dispatches).
     @njit
-    def closest_serial(x, start, end, radius, cell):
+    def closest_serial(x, start, end, radius, cell, slave_node, indices, num_nodes, window):
         grid, first, items = closest_setup(start, end, radius, cell)
+        rule = outline_rule(slave_node, indices, start, end, num_nodes, window)
         n = x.shape[0]
         segment, gap, found = np.empty(n, np.int64), np.empty(n, x.dtype), np.empty(n, np.bool_)
-        closest_rows(0, 1, x, start, end, radius, grid, first, items, segment, gap, found)
+        closest_rows(0, 1, x, start, end, radius, grid, first, items, rule, segment, gap, found)
         return segment, gap, found
 
     @numba.njit(cache=False, parallel=True)
-    def closest_parallel(x, start, end, radius, cell, parts):
+    def closest_parallel(
+        x, start, end, radius, cell, parts, slave_node, indices, num_nodes, window
+    ):
         grid, first, items = closest_setup(start, end, radius, cell)
+        rule = outline_rule(slave_node, indices, start, end, num_nodes, window)
         n = x.shape[0]
         segment, gap, found = np.empty(n, np.int64), np.empty(n, x.dtype), np.empty(n, np.bool_)
         for part in numba.prange(parts):
             closest_rows(
-                part, parts, x, start, end, radius, grid, first, items, segment, gap, found
+                part, parts, x, start, end, radius, grid, first, items, rule, segment, gap, found
             )
         return segment, gap, found
 
@@ -376,7 +523,7 @@ def _kernels():
     }
 
 
-def closest(x, start, end, radius, *, threads=1, cell=0.0):
+def closest(x, start, end, radius, *, threads=1, cell=0.0, pairs=None):
     """``(segment, gap, found)`` of every slave: the closest segment within ``radius``.
 
     Args:
@@ -386,6 +533,11 @@ def closest(x, start, end, radius, *, threads=1, cell=0.0):
       radius: search radius.
       threads: 1 (one loop) or more (numba's ``prange``, one part per thread).
       cell: cell edge; 0 for the rule of ``closest_setup`` (see ``_kernels``).
+      pairs: None, or jaxcontact's pair rule for slaves that are nodes of the outline,
+        ``(slave_node i64[N], indices i64[M, 2], num_nodes, self_contact)``: a slave never
+        meets a segment through its own node and, with ``self_contact``, not one within
+        ``4 radius`` of it along its own outline (``jaxcontact.Pairs``; the arc lengths
+        computed at every call, as the grid is).
 
     Returns:
       ``segment`` i64[N] (-1 where not found), ``gap`` f[N] in ``x``'s dtype
@@ -393,10 +545,25 @@ def closest(x, start, end, radius, *, threads=1, cell=0.0):
       distance, the larger signed normal distance, then the lower index.
     """
     serial, parallel = _kernels()["closest"]
+    rule = _rule(pairs, float(radius))
     if threads == 1:
-        return serial(x, start, end, float(radius), float(cell))
+        return serial(x, start, end, float(radius), float(cell), *rule)
     _kernels()["numba"].set_num_threads(threads)
-    return parallel(x, start, end, float(radius), float(cell), threads)
+    return parallel(x, start, end, float(radius), float(cell), threads, *rule)
+
+
+# jaxcontact's self-contact window in multiples of the radius (``pairs.SELF_CONTACT_REACH``).
+SELF_CONTACT_REACH = 4.0
+
+
+def _rule(pairs, radius: float) -> tuple:
+    """``closest``'s ``pairs`` as the kernels take them: no rule is empty arrays."""
+    if pairs is None:
+        return np.zeros(0, np.int64), np.zeros((0, 2), np.int64), 0, 0.0
+    slave_node, indices, num_nodes, self_contact = pairs
+    window = SELF_CONTACT_REACH * radius if self_contact else 0.0
+    indices = np.ascontiguousarray(indices, np.int64)
+    return np.ascontiguousarray(slave_node, np.int64), indices, int(num_nodes), window
 
 
 def swept(x_prev, x, start, end, *, threads=1, cell=0.0):

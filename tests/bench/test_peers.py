@@ -106,6 +106,36 @@ def test_numba_closest_with_no_slaves():
     assert segment.shape == gap.shape == found.shape == (0,) and gap.dtype == np.float32
 
 
+@pytest.mark.parametrize("self_contact", [False, True])
+def test_numba_closest_applies_the_pair_rule_as_the_library_does(self_contact):
+    # The chip's outline against itself: with no rule every node finds its own segments;
+    # with the rule (own node; self-contact's window along the outline) the numba grid must
+    # find exactly what all_to_all finds.
+    pytest.importorskip("numba")
+    from benchmarks.peer_codes import numba_grid
+    from jaxcontact import Pairs, all_to_all
+    from jaxcontact.scenes import curling_chip
+
+    scene = curling_chip(1_500)
+    pairs = Pairs(scene.slave_node, self_contact=self_contact)
+    want = all_to_all(scene.x, scene.surface, radius=scene.radius, pairs=pairs)
+    start, end = _run.endpoints(scene.surface)
+    rule = (scene.slave_node, scene.surface.segments, len(scene.surface.nodes), self_contact)
+    args = (np.asarray(scene.x), start, end, scene.radius)
+    segment, gap, found = numba_grid.closest(*args, pairs=tuple(np.asarray(v) for v in rule))
+    np.testing.assert_array_equal(found, np.asarray(want.found))
+    # Exact vertex ties may go either way (the two tie rules differ, and so may the sign at
+    # the vertex): equally far.
+    other = found & (segment != np.asarray(want.segment))
+    assert other.sum() <= 0.01 * found.sum()
+    far = np.abs(np.asarray(want.gap)[other])
+    np.testing.assert_allclose(np.abs(gap[other]), far, atol=1e-6 * scene.radius)
+    ends = np.asarray(scene.surface.segments)[segment[found]]
+    assert not np.any(ends == np.asarray(scene.slave_node)[found, None])
+    plain = numba_grid.closest(*args)[2]
+    assert plain.all() and 0 < found.sum() and (found.sum() < len(found)) == self_contact
+
+
 @pytest.mark.x64
 def test_a_wrong_crossing_is_counted():
     scene = cutting_scene(500, 18.0, x_tip_prev=19.5)
