@@ -466,9 +466,22 @@ def tool_position(cut: Cutting, start_x: float, step) -> Array:
     return start_x - cut.velocity * cut.dt * moved
 
 
+def tool_travel(cut: Cutting, step) -> np.ndarray:
+    """f64[...]: how far the tool has moved at ``step`` (an int or i[...]; mm, on the host).
+
+    ``tool_position``'s ramp in float64: the labels, the averaging window and
+    the summary read the travel from here, so that step 0 is 0 mm (not the
+    float32 rounding of ``start_x`` minus itself) and the run's last step is
+    ``Cutting.travel`` to within a step's motion."""
+    k = np.asarray(step, np.float64)
+    ramp = cut.ramp_steps
+    moved = np.where(k < ramp, 0.5 * k * k / ramp, k - 0.5 * ramp)
+    return cut.velocity * cut.dt * moved
+
+
 def travel_at(model: Model, step) -> float:
-    """How far the tool has cut at ``step`` (mm, on the host)."""
-    return model.start_x - float(tool_position(model.cut, model.start_x, step))
+    """How far the tool has cut at ``step`` (mm, on the host; ``tool_travel``)."""
+    return float(tool_travel(model.cut, step))
 
 
 # The edge's centre above the parting line, in edge radii, as the uncut
@@ -657,15 +670,33 @@ def step(model: Model, state: State, rake, mu) -> tuple[State, Record]:
     return after, record
 
 
-def _scan(model: Model, state: State, rake, mu, steps: int):
+def _scan(model: Model, state: State, rake, mu, steps: int, until=None):
     def body(state, _):
-        return step(model, state, rake, mu)
+        after, record = step(model, state, rake, mu)
+        if until is not None:
+            # From step ``until`` on, a step is worked out and dropped: the
+            # state stands still (and its rows of the record are no steps).
+            go = state.step < until
+            after = jax.tree.map(lambda new, old: jnp.where(go, new, old), after, state)
+        return after, record
 
     return jax.lax.scan(body, state, None, length=steps)
 
 
-advance = jax.jit(_scan, static_argnums=4)
-advance.__doc__ = """``steps`` steps from ``state``: ``(state, Record of each step)`` (jitted)."""
+_advance = jax.jit(_scan, static_argnums=4)
+_NEVER = np.iinfo(np.int32).max
+
+
+def advance(model: Model, state: State, rake, mu, steps: int, until=None):
+    """``steps`` steps from ``state``: ``(state, Record of each step)`` (jitted).
+
+    ``until`` (a step number; None: never): the state stands still once
+    ``state.step`` reaches it, and the rows from there on are no steps. A
+    traced number, so chunks of a run with a shorter last one, and
+    ``detection_share``'s scan of a chunk's length, are one compiled program.
+    """
+    until = jnp.asarray(_NEVER if until is None else until, jnp.int32)
+    return _advance(model, state, rake, mu, steps, until)
 
 
 def mean_forces(model: Model, state: State, rake, mu, steps: int | None = None, last: float = 0.4):
@@ -689,13 +720,19 @@ class Frame(NamedTuple):
 
 
 def run(cut: Cutting, rake_deg: float = 0.0, mu: float = MU, chunks: int = 40, progress=None):
-    """The whole cut, in ``chunks`` calls of one compiled program;
-    ``progress(done, total)`` is called after each. Returns ``(model, state,
-    record, frames, seconds)``: the ``Record`` of every step (NumPy), a
-    ``Frame`` at the start and after each chunk, and the seconds the chunks
-    took (compilation included in the first)."""
+    """The whole cut, ``cut.steps`` steps, in ``chunks`` calls of one compiled
+    program; ``progress(done, total)`` is called after each. Returns
+    ``(model, state, record, frames, seconds)``: the ``Record`` of every
+    step (NumPy, ``cut.steps`` rows), a ``Frame`` at the start and after each
+    chunk, and the seconds the chunks took (compilation included in the first).
+
+    The chunks are ``ceil(steps / chunks)`` steps long; the last one's steps
+    past ``cut.steps`` are dropped (``advance``'s ``until``), so that the run
+    ends where ``cut.steps`` says and the tool has moved ``cut.travel``
+    (to within one step's motion), whatever the number of chunks."""
     model, state = setup(cut)
-    per = math.ceil(cut.steps / chunks)
+    total = cut.steps
+    per = math.ceil(total / chunks)
     rake = jnp.asarray(math.radians(rake_deg), jnp.dtype(cut.dtype))
     mu = jnp.asarray(mu, jnp.dtype(cut.dtype))
 
@@ -709,13 +746,13 @@ def run(cut: Cutting, rake_deg: float = 0.0, mu: float = MU, chunks: int = 40, p
     records, frames = [], [frame(state)]
     started = time.perf_counter()
     for done in range(per, per * chunks + 1, per):
-        state, record = advance(model, state, rake, mu, per)
+        state, record = advance(model, state, rake, mu, per, until=total)
         records.append(jax.device_get(record))
         frames.append(frame(state))
         if progress is not None:
-            progress(done, per * chunks)
+            progress(min(done, total), total)
     seconds = time.perf_counter() - started
-    record = jax.tree.map(lambda *parts: np.concatenate(parts), *records)
+    record = jax.tree.map(lambda *parts: np.concatenate(parts)[:total], *records)
     return model, state, record, frames, seconds
 
 

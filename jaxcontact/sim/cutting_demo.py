@@ -276,6 +276,8 @@ def main(args: argparse.Namespace) -> int:
     cut = make_cut(args)
     if cut.dtype == "float64":
         jax.config.update("jax_enable_x64", True)
+    # cutting.run makes exactly cut.steps steps (the last chunk's extra steps
+    # dropped), after which the tool has moved cut.travel to within one step.
     print(
         f"cutting AISI 1045: {_conditions(cut, args.rake, args.mu)}, travel {cut.travel:g} mm, "
         f"elements {cut.element:g} mm, mass scaling {cut.mass_scaling:g}, {cut.dtype}: "
@@ -284,7 +286,7 @@ def main(args: argparse.Namespace) -> int:
     print(f"jax {jax.__version__} on {jax.devices()[0].device_kind}", flush=True)
     chunk = math.ceil(cut.steps / args.frames)
     progress = _Progress()
-    progress(0, chunk * args.frames)
+    progress(0, cut.steps)
     model, state, record, frames, seconds = cutting.run(
         cut, args.rake, args.mu, chunks=args.frames, progress=progress
     )
@@ -449,9 +451,7 @@ def draw_forces(model, record, summary: dict, path: str) -> str:
     force = np.asarray(record.force, np.float64)
     steps = len(force)
     # Row k of the record is the step from k to k + 1.
-    travel = model.start_x - np.asarray(
-        cutting.tool_position(cut, model.start_x, np.arange(1, steps + 1)), np.float64
-    )
+    travel = cutting.tool_travel(cut, np.arange(1, steps + 1))
     window = max(1, round(0.02 * steps))
     averaged = max(1, round(0.4 * steps))
     figure, axes = plt.subplots(figsize=(10, 4.8), dpi=150, layout="constrained")

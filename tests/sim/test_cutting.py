@@ -60,6 +60,21 @@ def test_a_chip_forms_and_rises_along_the_rake_face(coarse_run):
     assert 0 < late[1] < late[0]
 
 
+def test_the_run_makes_the_steps_and_the_travel_it_announces(coarse_run):
+    cut, model, state, record, frames, seconds = coarse_run
+    # 3,076 steps in 5 chunks of 616: the last chunk's 4 extra steps are dropped.
+    assert cut.steps % 5 != 0
+    assert int(state.step) == len(record.force) == frames[-1].step == cut.steps
+    assert [frame.step for frame in frames] == [0, 616, 1232, 1848, 2464, cut.steps]
+    # The travel: 0 at the start (not float32's rounding of the start), the
+    # asked travel at the end to within one step's motion.
+    assert cutting.travel_at(model, 0) == 0.0
+    step = cut.velocity * cut.dt
+    assert cut.travel <= cutting.travel_at(model, cut.steps) < cut.travel + step
+    summary = cutting.summary(model, state, record, frames, seconds, 0.0, cutting.MU)
+    assert summary["steps"] == cut.steps
+
+
 def test_the_chip_root_on_the_machined_surface_is_no_landing(coarse_run):
     # The chip's underside meets the machined surface at the crack tip: own
     # contacts there, never counted as the chip landing, which it does not
