@@ -73,6 +73,9 @@ def test_the_run_makes_the_steps_and_the_travel_it_announces(coarse_run):
     assert cut.travel <= cutting.travel_at(model, cut.steps) < cut.travel + step
     summary = cutting.summary(model, state, record, frames, seconds, 0.0, cutting.MU)
     assert summary["steps"] == cut.steps
+    assert summary["force_window_mm"][1] == cutting.travel_at(model, cut.steps)
+    # The pairs released in the run, each a row of the record where the count grows.
+    assert summary["pair_releases"] == int(record.released[-1] - record.released[0])
 
 
 def test_the_chip_root_on_the_machined_surface_is_no_landing(coarse_run):
