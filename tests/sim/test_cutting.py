@@ -19,7 +19,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxcontact.sim import cutting, explicit, solid
+from jaxcontact.sim import cutting, cutting_demo, explicit, solid
 from tests.tolerances import (
     FD_RUN_RTOL,
     FLOAT32_ATOL,
@@ -152,9 +152,17 @@ def test_the_summary_has_the_keys_a_machinist_reads(coarse_run):
     cut, model, state, record, frames, seconds = coarse_run
     summary = cutting.summary(model, state, record, frames, seconds, 0.0, cutting.MU)
     # The keys the issue asks summary.json for (the demo adds detection_share).
-    from tests.sim.test_cutting_demo import REQUIRED
+    from tests.sim.test_cutting_demo import REQUIRED, documented_keys
 
     assert REQUIRED - {"detection_share"} <= set(summary)
+    # summary.json's keys (cutting.summary's, then the demo's), each documented.
+    keys = [*summary, *cutting_demo.demo_keys(cut, 1.0, 0.25, 1.0)]
+    documented = documented_keys()
+    assert keys == documented, (
+        "docs/simulation.md's table \"The demo's summary.json\" lacks "
+        f"{sorted(set(keys) - set(documented))}, has no longer "
+        f"{sorted(set(documented) - set(keys))} (or the order differs)"
+    )
     assert summary["steps"] == int(state.step)
     assert summary["chip_thickness_ratio"] > 1  # a chip is thicker than the layer it was
     assert 0 < summary["shear_angle_deg"] < 45

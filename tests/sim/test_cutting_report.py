@@ -2,8 +2,8 @@
 
 ``cutting.steady_window`` (the steady-state criterion: a window to the run's
 end whose fitted line changes by at most 5 % of the mean) and
-``cutting.release_dips`` (F_c's dips against the pair releases). Plain
-NumPy: no run, no compile.
+``cutting.release_dips`` (F_c's dips against the pair releases), and the
+demo's sentences about them. Plain NumPy: no run, no compile.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ import types
 import numpy as np
 import pytest
 
-from jaxcontact.sim import cutting
+from jaxcontact.sim import cutting, cutting_demo
 from tests.tolerances import STEADY_FIT_RTOL
 
 ROWS = 6000  # rows of a synthetic history: 0.6 mm of travel
@@ -108,3 +108,30 @@ def test_the_dips_follow_the_releases():
     assert len(dips.lag) == len(dips.releases) - 1
     np.testing.assert_array_equal(dips.lag, 7)
     np.testing.assert_allclose(dips.depth, 40.0 * (1 - 1 / cycle), rtol=STEADY_FIT_RTOL)
+
+
+def _reported(steady: bool) -> dict:
+    return {
+        "forces_steady": steady,
+        "force_window_mm": [0.354, 0.6],
+        "cutting_force_drift_percent": 5.4,
+        "thrust_force_drift_percent": 17.8,
+        "release_dip_cycles": 22,
+        "release_dips_after_release": 22,
+        "release_dip_lag_steps": 9.0,
+        "release_dip_N_per_mm": 52.0,
+    }
+
+
+def test_the_demo_says_whether_the_means_are_steady():
+    assert cutting_demo.window_note(_reported(True)).startswith(
+        "steady from 0.354 mm of travel (to 0.600 mm; F_c drifts +5.4 %, F_t +17.8 %"
+    )
+    note = cutting_demo.window_note(_reported(False))
+    assert note.startswith("no steady state in the run")
+    assert "last 40 % of the steps, 0.354 to 0.600 mm; F_c drifts +5.4 %, F_t +17.8 %" in note
+    dips = cutting_demo.dips_note(_reported(True), 0.025, 600)
+    assert "in 22 of 22 element cycles" in dips and "within 60 steps after it" in dips
+    assert "a median 9 steps after, 52 N/mm below" in dips
+    too_few = dict(_reported(True), release_dip_N_per_mm=float("nan"))
+    assert cutting_demo.dips_note(too_few, 0.025, 600).startswith("(too few pair releases")
