@@ -26,7 +26,9 @@ The model, and why:
   ``partner``: a pair moves as one node). A pair is released for good when
   the edge's front comes within ``separation`` (default a quarter element) of
   where the pair started (the material ahead is pushed along with the tool,
-  so its current place would stay ahead). Released, the pair's two segments
+  so its current place would stay ahead). Each release lets go at once of
+  the load the tie carried: the cutting force dips once per element of
+  travel (``release_dips`` measures it). Released, the pair's two segments
   (the chip's underside and the machined surface) become part of the
   outline: they are switched on in the master's mask, from a pool allocated
   at the start (``Search.allocate(pool=...)``), so nothing recompiles. The
@@ -267,6 +269,12 @@ class Cutting:
         return max(1, round(self.ramp * self.travel / (self.velocity * self.dt)))
 
     @property
+    def element_steps(self) -> int:
+        """The steps one element's travel takes at full speed (at least 1): node
+        separation releases a pair once per element, so the force cycles over this."""
+        return max(1, round(self.element / (self.velocity * self.dt)))
+
+    @property
     def critical_distance(self) -> float:
         return 0.25 * self.element if self.separation is None else self.separation
 
@@ -466,9 +474,22 @@ def tool_position(cut: Cutting, start_x: float, step) -> Array:
     return start_x - cut.velocity * cut.dt * moved
 
 
+def tool_travel(cut: Cutting, step) -> np.ndarray:
+    """f64[...]: how far the tool has moved at ``step`` (an int or i[...]; mm, on the host).
+
+    ``tool_position``'s ramp in float64: the labels, the averaging window and
+    the summary read the travel from here, so that step 0 is 0 mm (not the
+    float32 rounding of ``start_x`` minus itself) and the run's last step is
+    ``Cutting.travel`` to within a step's motion."""
+    k = np.asarray(step, np.float64)
+    ramp = cut.ramp_steps
+    moved = np.where(k < ramp, 0.5 * k * k / ramp, k - 0.5 * ramp)
+    return cut.velocity * cut.dt * moved
+
+
 def travel_at(model: Model, step) -> float:
-    """How far the tool has cut at ``step`` (mm, on the host)."""
-    return model.start_x - float(tool_position(model.cut, model.start_x, step))
+    """How far the tool has cut at ``step`` (mm, on the host; ``tool_travel``)."""
+    return float(tool_travel(model.cut, step))
 
 
 # The edge's centre above the parting line, in edge radii, as the uncut
@@ -657,15 +678,33 @@ def step(model: Model, state: State, rake, mu) -> tuple[State, Record]:
     return after, record
 
 
-def _scan(model: Model, state: State, rake, mu, steps: int):
+def _scan(model: Model, state: State, rake, mu, steps: int, until=None):
     def body(state, _):
-        return step(model, state, rake, mu)
+        after, record = step(model, state, rake, mu)
+        if until is not None:
+            # From step ``until`` on, a step is worked out and dropped: the
+            # state stands still (and its rows of the record are no steps).
+            go = state.step < until
+            after = jax.tree.map(lambda new, old: jnp.where(go, new, old), after, state)
+        return after, record
 
     return jax.lax.scan(body, state, None, length=steps)
 
 
-advance = jax.jit(_scan, static_argnums=4)
-advance.__doc__ = """``steps`` steps from ``state``: ``(state, Record of each step)`` (jitted)."""
+_advance = jax.jit(_scan, static_argnums=4)
+_NEVER = np.iinfo(np.int32).max
+
+
+def advance(model: Model, state: State, rake, mu, steps: int, until=None):
+    """``steps`` steps from ``state``: ``(state, Record of each step)`` (jitted).
+
+    ``until`` (a step number; None: never): the state stands still once
+    ``state.step`` reaches it, and the rows from there on are no steps. A
+    traced number, so chunks of a run with a shorter last one, and
+    ``detection_share``'s scan of a chunk's length, are one compiled program.
+    """
+    until = jnp.asarray(_NEVER if until is None else until, jnp.int32)
+    return _advance(model, state, rake, mu, steps, until)
 
 
 def mean_forces(model: Model, state: State, rake, mu, steps: int | None = None, last: float = 0.4):
@@ -689,13 +728,19 @@ class Frame(NamedTuple):
 
 
 def run(cut: Cutting, rake_deg: float = 0.0, mu: float = MU, chunks: int = 40, progress=None):
-    """The whole cut, in ``chunks`` calls of one compiled program;
-    ``progress(done, total)`` is called after each. Returns ``(model, state,
-    record, frames, seconds)``: the ``Record`` of every step (NumPy), a
-    ``Frame`` at the start and after each chunk, and the seconds the chunks
-    took (compilation included in the first)."""
+    """The whole cut, ``cut.steps`` steps, in ``chunks`` calls of one compiled
+    program; ``progress(done, total)`` is called after each. Returns
+    ``(model, state, record, frames, seconds)``: the ``Record`` of every
+    step (NumPy, ``cut.steps`` rows), a ``Frame`` at the start and after each
+    chunk, and the seconds the chunks took (compilation included in the first).
+
+    The chunks are ``ceil(steps / chunks)`` steps long; the last one's steps
+    past ``cut.steps`` are dropped (``advance``'s ``until``), so that the run
+    ends where ``cut.steps`` says and the tool has moved ``cut.travel``
+    (to within one step's motion), whatever the number of chunks."""
     model, state = setup(cut)
-    per = math.ceil(cut.steps / chunks)
+    total = cut.steps
+    per = math.ceil(total / chunks)
     rake = jnp.asarray(math.radians(rake_deg), jnp.dtype(cut.dtype))
     mu = jnp.asarray(mu, jnp.dtype(cut.dtype))
 
@@ -709,17 +754,132 @@ def run(cut: Cutting, rake_deg: float = 0.0, mu: float = MU, chunks: int = 40, p
     records, frames = [], [frame(state)]
     started = time.perf_counter()
     for done in range(per, per * chunks + 1, per):
-        state, record = advance(model, state, rake, mu, per)
+        state, record = advance(model, state, rake, mu, per, until=total)
         records.append(jax.device_get(record))
         frames.append(frame(state))
         if progress is not None:
-            progress(done, per * chunks)
+            progress(min(done, total), total)
     seconds = time.perf_counter() - started
-    record = jax.tree.map(lambda *parts: np.concatenate(parts), *records)
+    record = jax.tree.map(lambda *parts: np.concatenate(parts)[:total], *records)
     return model, state, record, frames, seconds
 
 
 # -- what a run measured ----------------------------------------------------
+
+# The steady state of the forces: a criterion defined here, not taken from a
+# source. A window of the run's last steps is steady when the least-squares
+# line through each force component (raw, every step) changes across the
+# window by at most STEADY_DRIFT of that component's mean. A component whose
+# mean is under SMALL_FLOOR of the mean resultant is judged against that
+# floor instead (a thrust near 0 N/mm has no meaningful percentage).
+STEADY_DRIFT = 0.05
+SMALL_FLOOR = 0.1
+# The shortest window, and the one the means fall back on when none is
+# steady: the last 40 % of the steps (the convention of the summary's forces
+# before the criterion, kept so that their meaning stays where no steady
+# state shows).
+LAST = 0.4
+
+
+class Window(NamedTuple):
+    """Where a run's forces are averaged, and how far they drift there (plain numbers)."""
+
+    start: int  # the window's first row of the record (it runs to the last)
+    steady: bool  # the criterion held from ``start`` on (False: the fallback, the last LAST)
+    mean: np.ndarray  # f[2]  the mean force over the window (N/mm): cutting, thrust
+    drift: np.ndarray  # f[2]  the line's change across the window, % of the judged mean
+
+
+def _drift(travel: np.ndarray, force: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The mean (f[2]) and the least-squares line's change across the window
+    in % of the judged mean (f[2]) of ``force`` (f[T, 2]) against ``travel`` (f[T])."""
+    mean = force.mean(axis=0)
+    s = travel - travel.mean()
+    spread = float(np.sum(s * s))
+    # No travel across the window (one row): no line, and no steady state.
+    slope = (s @ (force - mean)) / spread if spread > 0 else np.full(2, np.nan)
+    judged = np.maximum(np.abs(mean), SMALL_FLOOR * np.hypot(*mean))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        drift = 100 * slope * (travel[-1] - travel[0]) / judged
+    return mean, drift
+
+
+def steady_window(
+    travel, force, spacing: float, tolerance: float = STEADY_DRIFT, last: float = LAST
+) -> Window:
+    """The window the forces are averaged over: from the earliest start, on a
+    grid of ``spacing`` mm of travel back from the start of the last ``last``
+    of the rows, such that the window from it and every later start on the
+    grid drifts by at most ``tolerance`` (``STEADY_DRIFT``); when even the
+    last ``last`` drifts more, that window, not steady.
+
+    ``travel`` (f[T], mm, not decreasing) and ``force`` (f[T, 2], N/mm) are
+    a run's rows. ``spacing`` is the element's edge in a cut: a window then
+    holds whole cycles of the dip each pair release causes (``release_dips``),
+    which would otherwise tilt the line. Every window ends at the run's end:
+    a steady state lasts once reached."""
+    travel = np.asarray(travel, np.float64)
+    force = np.asarray(force, np.float64)
+    rows = len(force)
+    if rows == 0 or force.shape != (rows, 2) or travel.shape != (rows,):
+        raise ValueError(
+            f"steady_window needs travel f[T] and force f[T, 2] with T >= 1; "
+            f"got {travel.shape} and {force.shape}"
+        )
+    if not spacing > 0:
+        raise ValueError(f"steady_window's spacing must be > 0 mm; got {spacing!r}")
+    if not (tolerance > 0 and 0 < last <= 1):
+        raise ValueError(
+            f"steady_window needs tolerance > 0 and 0 < last <= 1; got {tolerance!r} and {last!r}"
+        )
+    shortest = rows - max(1, round(last * rows))
+    starts = [shortest]
+    while True:
+        row = int(np.searchsorted(travel, travel[starts[-1]] - spacing, side="left"))
+        if row >= starts[-1] or travel[starts[-1]] - spacing < travel[0]:
+            break
+        starts.append(row)
+    found = None
+    for start in starts:  # the shortest window first, then ever longer
+        _, drift = _drift(travel[start:], force[start:])
+        if not np.all(np.abs(drift) <= 100 * tolerance):
+            break
+        found = start
+    start = shortest if found is None else found
+    mean, drift = _drift(travel[start:], force[start:])
+    return Window(start, found is not None, mean, drift)
+
+
+class Dips(NamedTuple):
+    """How the cutting force falls at the release of the parting line's pairs (node
+    separation), one entry per release with a whole element's cycle of rows around it."""
+
+    releases: np.ndarray  # i[R]  every row at which a pair (or more) was released
+    lag: np.ndarray  # i[C]  rows from a release to F_c's lowest in the cycle around it
+    depth: np.ndarray  # f[C]  that lowest below the cycle's mean F_c (N/mm)
+
+
+def release_dips(record: Record, cycle: int) -> Dips:
+    """The dips in F_c against the release steps of the tied pairs.
+
+    ``cycle``: the rows one element's travel takes (the releases come once
+    per element). For each release with a whole cycle around it (half before,
+    half after), the row of F_c's lowest value in that cycle, counted from the
+    release, and how far it lies below the cycle's mean. Were the dips not
+    the releases' doing, the lags would spread over the cycle."""
+    released = np.asarray(record.released)
+    force = np.asarray(record.force, np.float64)[:, 0]
+    releases = np.flatnonzero(np.diff(released) > 0) + 1
+    half = max(1, cycle // 2)
+    lag, depth = [], []
+    for row in releases:
+        if row - half < 0 or row + half > len(force):
+            continue
+        around = force[row - half : row + half]
+        lowest = int(np.argmin(around))
+        lag.append(lowest - half)
+        depth.append(float(around.mean() - around[lowest]))
+    return Dips(releases, np.asarray(lag, np.int64), np.asarray(depth, np.float64))
 
 
 def _inside(points: np.ndarray, polygon: np.ndarray) -> np.ndarray:
@@ -808,18 +968,31 @@ def _steady_elements(model: Model, state: State) -> np.ndarray:
 
 
 def summary(model: Model, state: State, record: Record, frames, seconds: float, rake_deg, mu):
-    """What the run measured, and the analyses set beside it (plain numbers).
+    """What the run measured, and the analyses set beside it (plain numbers;
+    docs/simulation.md's "The demo's summary.json" lists every key).
 
-    Forces are the means over the last 40 % of the steps (N per mm of
-    width); the chip's thickness, strain and temperature are those of the
-    steady chip (``_steady_elements``); Merchant's shear stress is the
-    Johnson–Cook flow stress over sqrt 3 at the steady chip's median plastic
-    strain and temperature and the 90th percentile of the uncut layer's
-    plastic strain rate over the last frame (the primary shear zone's).
+    Forces are the means (N per mm of width) over ``steady_window``'s
+    window: from where the forces are steady to the end, or, when they are
+    not steady in the run, the last 40 % of the steps, with the drift there
+    (``forces_steady``, ``force_window_mm``, ``*_drift_percent``); the
+    dips of F_c at the pair releases, by ``release_dips``. The chip's
+    thickness, strain and temperature are those of the steady chip
+    (``_steady_elements``); Merchant's shear stress is the Johnson–Cook flow
+    stress over sqrt 3 at the steady chip's median plastic strain and
+    temperature and the 90th percentile of the uncut layer's plastic strain
+    rate over the last frame (the primary shear zone's).
     """
     cut = model.cut
-    window = max(1, round(0.4 * len(record.force)))
-    cutting_force, thrust = (float(v) for v in np.mean(record.force[-window:], axis=0))
+    rows = len(record.force)
+    # Row k of the record is the step from k to k + 1.
+    travel = tool_travel(cut, np.arange(1, rows + 1))
+    window = steady_window(travel, record.force, cut.element)
+    cutting_force, thrust = (float(v) for v in window.mean)
+    cycle = cut.element_steps
+    dips = release_dips(record, cycle)
+    # A dip is the release's when F_c's lowest in the cycle comes within a
+    # tenth of the cycle after it.
+    after = (dips.lag >= 0) & (dips.lag <= cycle // 10)
     thickness = chip_thickness(model, state)
     ratio = cut.uncut / thickness
     phi = machining.shear_angle_from_chip(ratio, rake_deg)
@@ -854,6 +1027,15 @@ def summary(model: Model, state: State, record: Record, frames, seconds: float, 
         "friction_shear_factor": cut.shear_factor,
         "cutting_force_N_per_mm": cutting_force,
         "thrust_force_N_per_mm": thrust,
+        "forces_steady": window.steady,
+        "force_window_mm": [float(travel[window.start]), float(travel[-1])],
+        "cutting_force_drift_percent": float(window.drift[0]),
+        "thrust_force_drift_percent": float(window.drift[1]),
+        "pair_releases": int(len(dips.releases)),
+        "release_dip_cycles": int(len(dips.lag)),
+        "release_dips_after_release": int(np.sum(after)),
+        "release_dip_lag_steps": float(np.median(dips.lag)) if len(after) else float("nan"),
+        "release_dip_N_per_mm": float(np.median(dips.depth)) if len(after) else float("nan"),
         "chip_thickness_mm": thickness,
         "chip_thickness_ratio": thickness / cut.uncut,
         "shear_angle_deg": phi,

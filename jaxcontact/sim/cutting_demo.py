@@ -8,6 +8,14 @@ also draws ``OUT/chip.png`` (the chip at the end, by plastic strain and by
 temperature), ``OUT/forces.png`` (the forces against the travel, beside
 Merchant's and Kienzle's) and ``OUT/chip.gif`` (the chip forming).
 
+The report says what its numbers are: whether the forces reached a steady
+state and over which window they are averaged (``cutting.steady_window``),
+what the raw cutting force's dips are (the pair releases of node separation,
+measured by ``cutting.release_dips``), and what Kienzle's band's edges are.
+The run makes the steps the header announces, and the travel labels come
+from ``cutting.tool_travel``. docs/simulation.md documents every key of
+summary.json.
+
 The pictures are drawn in the tool's frame: x from the cutting edge's lowest
 point, y from the parting line (the depth of cut), both in mm.
 """
@@ -19,6 +27,7 @@ import json
 import math
 import os
 import sys
+import textwrap
 import time
 import warnings
 
@@ -26,7 +35,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxcontact.sim import cutting
+from jaxcontact.sim import cutting, machining
 
 _DEFAULT = cutting.Cutting()  # the default cut: the options' defaults are its numbers
 TRAVEL = _DEFAULT.travel  # mm, the default tool travel
@@ -41,6 +50,7 @@ CURL = {"breaker": (0.25, 30.0, 0.5), "element": 0.05, "travel": 3.2, "ahead": 1
 FRAMES = 40  # the run in this many calls, a frame after each: the GIF's frames
 _BAR = 30  # characters of the progress bar
 _EDGES = (0.15, 0.15, 0.15, 0.5)  # the elements' edges: dark grey, half transparent
+_CAPTION = 165  # characters a line of the forces figure's caption (8 pt across 11 inches)
 
 
 def _number(least: float = 0.0, most: float | None = None, strict: bool = True):
@@ -267,6 +277,21 @@ def _conditions(cut: cutting.Cutting, rake_deg: float, mu: float) -> str:
     return f"v = {cut.speed:g} m/min, h = {cut.uncut:g} mm, rake {rake_deg:g}°, μ = {mu:g}"
 
 
+def demo_keys(cut: cutting.Cutting, rate: float, share: float, seconds: float) -> dict:
+    """What summary.json holds beyond ``cutting.summary``: the run's steps per second
+    after the first chunk (``rate``), detection's share of a step, the cut's travel
+    (mm, as asked; the run's last step reaches it to within a step's motion), element
+    (mm) and dtype, and the run's seconds."""
+    return {
+        "steps_per_second_after_compile": rate,
+        "detection_share": share,
+        "travel_mm": cut.travel,
+        "element_mm": cut.element,
+        "dtype": cut.dtype,
+        "run_seconds": seconds,
+    }
+
+
 def main(args: argparse.Namespace) -> int:
     """The ``demo`` subcommand for the cutting simulation; returns the exit status."""
     problem = check(args)
@@ -276,6 +301,8 @@ def main(args: argparse.Namespace) -> int:
     cut = make_cut(args)
     if cut.dtype == "float64":
         jax.config.update("jax_enable_x64", True)
+    # cutting.run makes exactly cut.steps steps (the last chunk's extra steps
+    # dropped), after which the tool has moved cut.travel to within one step.
     print(
         f"cutting AISI 1045: {_conditions(cut, args.rake, args.mu)}, travel {cut.travel:g} mm, "
         f"elements {cut.element:g} mm, mass scaling {cut.mass_scaling:g}, {cut.dtype}: "
@@ -284,7 +311,7 @@ def main(args: argparse.Namespace) -> int:
     print(f"jax {jax.__version__} on {jax.devices()[0].device_kind}", flush=True)
     chunk = math.ceil(cut.steps / args.frames)
     progress = _Progress()
-    progress(0, chunk * args.frames)
+    progress(0, cut.steps)
     model, state, record, frames, seconds = cutting.run(
         cut, args.rake, args.mu, chunks=args.frames, progress=progress
     )
@@ -296,15 +323,10 @@ def main(args: argparse.Namespace) -> int:
         # warnings about the empty means behind it.
         warnings.simplefilter("ignore", RuntimeWarning)
         summary = cutting.summary(model, state, record, frames, seconds, args.rake, args.mu)
-    summary.update(
-        steps_per_second_after_compile=progress.rate(),
-        detection_share=share,
-        travel_mm=cut.travel,
-        element_mm=cut.element,
-        dtype=cut.dtype,
-        run_seconds=seconds,
-    )
+    summary.update(demo_keys(cut, progress.rate(), share, seconds))
     print_table(summary)
+    print(f"  forces: {window_note(summary)}")
+    print(f"  {dips_note(summary, cut.element, cut.element_steps)}")
     if not math.isfinite(summary["chip_thickness_mm"]):
         print(
             "  (no steady chip: the cut is too short to measure one; "
@@ -441,62 +463,150 @@ def _moving_average(values: np.ndarray, window: int) -> np.ndarray:
     return total / count
 
 
+def _percent(value: float) -> str:
+    return "nan" if not math.isfinite(value) else f"{value:+.1f} %"
+
+
+def window_note(summary: dict) -> str:
+    """What the forces' means are taken over, in words (the printout's line and the
+    forces figure's caption): the steady window's start, or the drift where none is."""
+    start, end = summary["force_window_mm"]
+    drift = (
+        f"F_c drifts {_percent(summary['cutting_force_drift_percent'])}, "
+        f"F_t {_percent(summary['thrust_force_drift_percent'])} across it"
+    )
+    if summary["forces_steady"]:
+        return (
+            f"steady from {start:.3f} mm of travel (to {end:.3f} mm; {drift}, within "
+            f"±{100 * cutting.STEADY_DRIFT:g} %): the means are over that window"
+        )
+    return (
+        f"no steady state in the run (no window to its end drifts within "
+        f"±{100 * cutting.STEADY_DRIFT:g} %): the means are over the last "
+        f"{100 * cutting.LAST:g} % of the steps, {start:.3f} to {end:.3f} mm; {drift}"
+    )
+
+
+def dips_note(summary: dict, element: float, cycle: int) -> str:
+    """What the raw F_c's dips are, with the run's own evidence, in words."""
+    if not math.isfinite(summary["release_dip_N_per_mm"]):
+        return "(too few pair releases to measure F_c's dips at them)"
+    return (
+        f"The raw F_c dips once per element of travel ({element:g} mm, {cycle:,} steps), "
+        f"as node separation releases a pair of the parting line: in "
+        f"{summary['release_dips_after_release']} of {summary['release_dip_cycles']} element "
+        f"cycles around a release, F_c's lowest comes within {cycle // 10} steps after it "
+        f"(a median {summary['release_dip_lag_steps']:.0f} steps after, "
+        f"{summary['release_dip_N_per_mm']:.0f} N/mm below the cycle's mean)"
+    )
+
+
 def draw_forces(model, record, summary: dict, path: str) -> str:
-    """The cutting and thrust forces against the travel, beside Merchant's and Kienzle's."""
+    """The cutting and thrust forces against the travel, beside Merchant's and Kienzle's:
+    raw (faint), averaged over one element of travel (which takes out the dip at each
+    pair release, marked), the averaging window with its fitted lines (the drift)."""
     import matplotlib.pyplot as plt
 
     cut = model.cut
     force = np.asarray(record.force, np.float64)
     steps = len(force)
     # Row k of the record is the step from k to k + 1.
-    travel = model.start_x - np.asarray(
-        cutting.tool_position(cut, model.start_x, np.arange(1, steps + 1)), np.float64
-    )
-    window = max(1, round(0.02 * steps))
-    averaged = max(1, round(0.4 * steps))
-    figure, axes = plt.subplots(figsize=(10, 4.8), dpi=150, layout="constrained")
+    travel = cutting.tool_travel(cut, np.arange(1, steps + 1))
+    cycle = cut.element_steps
+    start, end = summary["force_window_mm"]
+    first = int(np.searchsorted(travel, start))
+    figure, axes = plt.subplots(figsize=(11, 5.6), dpi=150, layout="constrained")
     axes.axvspan(
-        travel[-averaged],
-        travel[-1],
+        start,
+        end,
         color="0.9",
         zorder=0,
-        label="mean over the last 40 % of steps",
+        label=(
+            "steady: the means' window"
+            if summary["forces_steady"]
+            else f"no steady state: the last {100 * cutting.LAST:g} %"
+        )
+        + f" from {start:.3f} mm",
     )
     low, high = summary["kienzle_band_N_per_mm"]
-    axes.axhspan(low, high, color="tab:green", alpha=0.2, lw=0, label="Kienzle (Ck45)")
-    quantities = (
-        (0, "cutting force F_c", "tab:blue", "cutting_force_N_per_mm", "merchant_cutting_force"),
-        (1, "thrust force F_t", "tab:orange", "thrust_force_N_per_mm", "merchant_thrust_force"),
+    k_c11, m_c = machining.KIENZLE_CK45
+    axes.axhspan(
+        low,
+        high,
+        color="tab:green",
+        alpha=0.2,
+        lw=0,
+        label=f"Kienzle, Ck45: {low:.0f} to {high:.0f} N/mm at h = {cut.uncut:g} mm\n"
+        f"(k_c1.1 = 1500 to {k_c11:g} N/mm², m_c = {m_c:g};\n"
+        f"{k_c11:g}: König and Klocke; 1500: handbooks' low end)",
     )
-    for column, name, colour, mean, merchant in quantities:
-        axes.plot(travel, force[:, column], c=colour, lw=0.5, alpha=0.3)
+    quantities = (
+        (0, "F_c", "cutting", "tab:blue", "cutting_force"),
+        (1, "F_t", "thrust", "tab:orange", "thrust_force"),
+    )
+    for column, symbol, name, colour, key in quantities:
+        axes.plot(travel, force[:, column], c=colour, lw=0.4, alpha=0.25)
         axes.plot(
             travel,
-            _moving_average(force[:, column], window),
+            _moving_average(force[:, column], cycle),
             c=colour,
             lw=1.5,
-            label=f"{name} (mean {summary[mean]:,.0f} N/mm)",
+            label=f"{name} force {symbol}: mean {summary[f'{key}_N_per_mm']:,.0f} N/mm",
         )
-        theory = summary[f"{merchant}_N_per_mm"]
+        # The least-squares line over the window: its change across it is the drift.
+        if steps - first >= 2:
+            slope, offset = np.polyfit(travel[first:], force[first:, column], 1)
+            ends = np.array([travel[first], travel[-1]])
+            axes.plot(
+                ends,
+                offset + slope * ends,
+                c=colour,
+                ls=":",
+                lw=1.5,
+                label=f"{symbol}'s fitted line there: "
+                f"{_percent(summary[f'{key}_drift_percent'])} across it",
+            )
+        theory = summary[f"merchant_{key}_N_per_mm"]
         if math.isfinite(theory):
             axes.axhline(
-                theory,
-                c=colour,
-                ls="--",
-                lw=1.2,
-                label=f"Merchant's {name[-3:]} ({theory:,.0f} N/mm)",
+                theory, c=colour, ls="--", lw=1.2, label=f"Merchant's {symbol} ({theory:,.0f} N/mm)"
             )
     axes.plot([], [], c="0.5", lw=0.5, alpha=0.6, label="raw (each step)")
+    releases = cutting.release_dips(record, cycle).releases
+    axes.plot(
+        travel[releases],
+        np.full(len(releases), 0.02),
+        ls="",
+        marker="|",
+        ms=10,
+        c="0.25",
+        transform=axes.get_xaxis_transform(),
+        label="a parting-line pair released",
+    )
     axes.set(
         xlabel="tool travel (mm)",
         ylabel="force on the tool (N per mm of width)",
         xlim=(0, travel[-1]),
+        ylim=(0, None),
     )
     axes.set_title(
-        f"{_conditions(cut, summary['rake_deg'], summary['friction'])}: the forces, "
-        f"averaged over {window} steps ({window / steps:.0%})"
+        f"{_conditions(cut, summary['rake_deg'], summary['friction'])}:\nthe forces on the "
+        f"tool over {travel[-1]:.3f} mm of travel ({steps:,} steps)"
     )
     axes.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
+    caption = (
+        "Thick lines: the force averaged over one element of travel, which takes out the dip "
+        "of each release (faint: the raw force).",
+        dips_note(summary, cut.element, cycle) + ".",
+        "Shaded: " + window_note(summary) + ".",
+    )
+    figure.supxlabel(
+        "\n".join(textwrap.fill(line, _CAPTION) for line in caption),
+        fontsize=8,
+        x=0.01,
+        ha="left",
+        multialignment="left",
+    )
     figure.savefig(path)
     plt.close(figure)
     return path

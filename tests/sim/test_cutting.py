@@ -19,7 +19,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxcontact.sim import cutting, explicit, solid
+from jaxcontact.sim import cutting, cutting_demo, explicit, solid
 from tests.tolerances import (
     FD_RUN_RTOL,
     FLOAT32_ATOL,
@@ -58,6 +58,24 @@ def test_a_chip_forms_and_rises_along_the_rake_face(coarse_run):
     late = record.force[len(record.force) // 2 :].mean(axis=0)
     assert 50 < late[0] < 1000
     assert 0 < late[1] < late[0]
+
+
+def test_the_run_makes_the_steps_and_the_travel_it_announces(coarse_run):
+    cut, model, state, record, frames, seconds = coarse_run
+    # 3,076 steps in 5 chunks of 616: the last chunk's 4 extra steps are dropped.
+    assert cut.steps % 5 != 0
+    assert int(state.step) == len(record.force) == frames[-1].step == cut.steps
+    assert [frame.step for frame in frames] == [0, 616, 1232, 1848, 2464, cut.steps]
+    # The travel: 0 at the start (not float32's rounding of the start), the
+    # asked travel at the end to within one step's motion.
+    assert cutting.travel_at(model, 0) == 0.0
+    step = cut.velocity * cut.dt
+    assert cut.travel <= cutting.travel_at(model, cut.steps) < cut.travel + step
+    summary = cutting.summary(model, state, record, frames, seconds, 0.0, cutting.MU)
+    assert summary["steps"] == cut.steps
+    assert summary["force_window_mm"][1] == cutting.travel_at(model, cut.steps)
+    # The pairs released in the run, each a row of the record where the count grows.
+    assert summary["pair_releases"] == int(record.released[-1] - record.released[0])
 
 
 def test_the_chip_root_on_the_machined_surface_is_no_landing(coarse_run):
@@ -134,9 +152,17 @@ def test_the_summary_has_the_keys_a_machinist_reads(coarse_run):
     cut, model, state, record, frames, seconds = coarse_run
     summary = cutting.summary(model, state, record, frames, seconds, 0.0, cutting.MU)
     # The keys the issue asks summary.json for (the demo adds detection_share).
-    from tests.sim.test_cutting_demo import REQUIRED
+    from tests.sim.test_cutting_demo import REQUIRED, documented_keys
 
     assert REQUIRED - {"detection_share"} <= set(summary)
+    # summary.json's keys (cutting.summary's, then the demo's), each documented.
+    keys = [*summary, *cutting_demo.demo_keys(cut, 1.0, 0.25, 1.0)]
+    documented = documented_keys()
+    assert keys == documented, (
+        "docs/simulation.md's table \"The demo's summary.json\" lacks "
+        f"{sorted(set(keys) - set(documented))}, has no longer "
+        f"{sorted(set(documented) - set(keys))} (or the order differs)"
+    )
     assert summary["steps"] == int(state.step)
     assert summary["chip_thickness_ratio"] > 1  # a chip is thicker than the layer it was
     assert 0 < summary["shear_angle_deg"] < 45

@@ -3,6 +3,8 @@
 import argparse
 import json
 import math
+import pathlib
+import re
 
 import pytest
 
@@ -33,6 +35,20 @@ REQUIRED = {
     "eroded_elements",
     "detection_share",
 }
+
+
+DOCS = pathlib.Path(__file__).resolve().parents[2] / "docs" / "simulation.md"
+
+
+def documented_keys() -> list[str]:
+    """The keys docs/simulation.md's table "The demo's summary.json" documents, in order."""
+    section = DOCS.read_text().split("### The demo's summary.json\n", 1)[1].split("\n#", 1)[0]
+    return re.findall(r"^\| `(\w+)` \|", section, re.M)
+
+
+def test_the_documented_keys_are_each_one_row():
+    keys = documented_keys()
+    assert len(keys) == len(set(keys)) and REQUIRED <= set(keys)
 
 
 def _demo_args(*argv: str) -> argparse.Namespace:
@@ -151,10 +167,16 @@ def test_tiny_cut_end_to_end(tmp_path, capsys, monkeypatch):
     assert "100%" in captured.err and "steps" in captured.err  # the progress bar
     assert "cutting_force_N_per_mm" in captured.out and "detection_share" in captured.out
     summary = json.loads((tmp_path / "summary.json").read_text())
-    assert REQUIRED <= summary.keys()
+    assert list(summary) == documented_keys()  # every key in docs/simulation.md's table
+    # The header's steps are the steps run, the travel the travel asked.
+    assert f"{steps:,} steps of dt" in captured.out and summary["steps"] == steps
+    assert "forces: no steady state in the run" in captured.out
+    assert summary["forces_steady"] is False and summary["force_window_mm"][1] == pytest.approx(
+        0.05, abs=cutting.Cutting(travel=0.05, element=0.05).velocity * 1e-7
+    )
     assert summary["cutting_force_N_per_mm"] > 0
     assert all(math.isfinite(summary[key]) for key in ("thrust_force_N_per_mm", "steps_per_second"))
-    assert summary["steps"] >= steps and summary["elements"] == 54
+    assert summary["elements"] == 54
     assert summary["detection_share"] == 0.25 and summary["overflow"] is False
     # The band for Ck45 at the run's 0.1 mm, worked by hand (tests/sim/test_machining.py).
     assert summary["kienzle_band_N_per_mm"] == pytest.approx(
