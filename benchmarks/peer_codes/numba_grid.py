@@ -126,7 +126,9 @@ def _kernels():
         ox, oy = px - qx, py - qy
         return ox * ox + oy * oy, ox * dy - oy * dx
 
-    @njit
+    # Inlined into the loop over a list's segments: called, it cost 3.5x the plain query's
+    # time on the chip's outline at 10^4 nodes (measured alternated in one process).
+    @numba.njit(cache=False, inline="always")
     def allowed(node, k, indices, seg_chain, low, high, loop, node_chain, node_arc, selfc, window):
         """Whether slave node ``node`` may meet segment ``k`` (jaxcontact's pair rule,
         ``jaxcontact/_pipeline/pairs.py``): never a segment through its own node; with
