@@ -276,23 +276,27 @@ def _kernels():
                 node = slave_node[row] if own else -1
                 for entry in range(first[c], first[c + 1]):
                     k = items[entry]
-                    if node >= 0 and not allowed(
-                        node,
-                        k,
-                        indices,
-                        seg_chain,
-                        low,
-                        high,
-                        loop,
-                        node_chain,
-                        node_arc,
-                        self_contact,
-                        window,
-                    ):
-                        continue
                     ax, ay = np.float64(start[k, 0]), np.float64(start[k, 1])
                     bx, by = np.float64(end[k, 0]), np.float64(end[k, 1])
                     distance_squared, cross = project(px, py, ax, ay, bx, by)
+                    # The rule is asked only of a pair that would be kept: most are not.
+                    if distance_squared > best or (
+                        node >= 0
+                        and not allowed(
+                            node,
+                            k,
+                            indices,
+                            seg_chain,
+                            low,
+                            high,
+                            loop,
+                            node_chain,
+                            node_arc,
+                            self_contact,
+                            window,
+                        )
+                    ):
+                        continue
                     if distance_squared < best:
                         best, best_k, best_cross = distance_squared, k, cross
                     elif distance_squared == best and best_k >= 0:
