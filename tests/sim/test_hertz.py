@@ -154,6 +154,7 @@ def test_the_peak_pressures_gradient(small):
         (lambda: hertz.solve(width=6.0), "width must be a finite number > 6"),
         (lambda: hertz.solve(depth=1.0), "depth must be a finite number > 1.5"),
         (lambda: hertz.block(growth=1.0), "growth must be in (1, 2]; got 1.0"),
+        (lambda: hertz.solve(hertz.Indentation(force=3e5)), "problem must give Hertz's a / R at"),
         (lambda: hertz.solve(solver="fast"), "solver must be a Solver; got str"),
         (lambda: hertz.Solver(penalty=0.0), "Solver.penalty must be a finite number > 0"),
         (lambda: hertz.Solver(cg_steps=0), "Solver.cg_steps must be an integer >= 1"),
