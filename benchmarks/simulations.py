@@ -1,6 +1,7 @@
-"""Simulations: orthogonal cutting against Merchant and Kienzle, the ploughing simulation's speed.
+"""Simulations: orthogonal cutting against Merchant and Kienzle, the ploughing simulation's speed,
+a cylinder pressed into an elastic block against Hertz.
 
-Two parts, float32, each run as ``jaxcontact demo`` runs it:
+Three parts, the first two float32, each run as ``jaxcontact demo`` runs it:
 
 1. **Orthogonal cutting** (``jaxcontact.sim.cutting``: AISI 1045, 100 m/min, h = 0.10 mm,
    rake 0°, mu = 0.3 capped at half the shear flow stress, 4 elements through h, 0.6 mm of
@@ -28,6 +29,18 @@ Two parts, float32, each run as ``jaxcontact demo`` runs it:
    fixed contact result (``run(..., detect=False)``: the same elastic update and force
    assembly, no ``Search.closest``), the two in alternation. The detection share is the
    median over those pairs of ``1 - without / with``.
+3. **Hertz indentation** (``jaxcontact.sim.hertz``, float64): a rigid cylinder (R = 10 mm)
+   pressed with P = 1,000 N/mm into an elastic steel block (E = 210 GPa, nu = 0.3), plane
+   strain, frictionless, solved to equilibrium by Newton-CG at 12, 24 and 48 elements across
+   Hertz's contact width 2a (``--quick``: 12 and 24), against Hertz's line contact (Johnson,
+   Contact Mechanics, 1985, eq. 4.43-4.45: a = sqrt(4PR / pi E*), p0 = 2P / pi a, E* = E /
+   (1 - nu^2)). Reported per mesh: the FE a (the least-squares fit of p^2 = p0^2 (1 - x^2/a^2)
+   over the pressed nodes) and p0 (the node at x = 0) against Hertz's, the relative L2 error
+   of the nodal pressures, the deepest penetration, and ``jax.grad`` of the FE p0 with
+   respect to R and E (the implicit-function theorem) against Hertz's dp0/dR = -p0/2R,
+   dp0/dE = p0/2E and against a central difference of the FE value (step 1e-5 of the
+   parameter). Timed: the solve with its compilation, then again compiled; the gradient
+   likewise.
 
 A published orthogonal-cutting experiment on AISI 1045 is not in this comparison: the data
 sets found (Klippel et al. 2024, Int. J. Adv. Manuf. Technol. 135, 2871-2908, Ck45 with open
@@ -35,11 +48,13 @@ data; the CIRP benchmark of Ivester et al. 2000) could not be read from this mac
 number is quoted from memory.
 
 The figure: the cutting and thrust forces against the tool's travel with Merchant's and
-Kienzle's predictions, and detection's share of a step in every run.
+Kienzle's predictions, detection's share of a step in every run; the FE contact pressure of
+each mesh over Hertz's, and the errors against the element size.
 
-    python benchmarks/simulations.py                  # about 7 min on 2 cores
+    python benchmarks/simulations.py                  # about 10 min on 2 cores
     taskset -c 0 python benchmarks/simulations.py --out benchmarks/results/pinned
-    python benchmarks/simulations.py --quick          # a coarse cut, 2,000 nodes ploughing
+    python benchmarks/simulations.py --quick          # a coarse cut, 2,000 nodes ploughing,
+                                                      # Hertz at 12 and 24 elements
     python benchmarks/simulations.py --fine           # and a cut at half the element size
 """
 
@@ -52,16 +67,19 @@ import time
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))  # the repo root: benchmarks.*
 
+import jax
 import numpy as np
 
 from benchmarks.harness import _run, report, style
-from jaxcontact.sim import cutting
+from jaxcontact.sim import cutting, hertz
 from jaxcontact.sim.demo import run_demo
 
-TITLE = "Simulations: orthogonal cutting, ploughing"
+TITLE = "Simulations: orthogonal cutting, ploughing, a cylinder against Hertz"
 POINTS = 300  # a force trace's points in the record: means over as many equal runs of steps
 COARSE = {"element": 0.05, "uncut": 0.10, "depth": 0.1, "travel": 0.25}  # --quick's cut
 PLOUGHING = {"full": ((10_000, 63_001), 0.5), "quick": ((2_000,), 0.1)}  # (nodes, travel mm)
+HERTZ = {"full": hertz.MESHES, "quick": hertz.MESHES[:2]}  # elements across 2a
+HERTZ_STEP = 1e-5  # the central difference's step, relative to the parameter
 OPTIONS = ((("--fine",), {"action": "store_true", "help": "also cut at half the element size"}),)
 # The quantities of the cutting table: (row, summary key, decimals; None: as it is).
 QUANTITIES = (
@@ -270,6 +288,223 @@ def ploughing_table(rows, travel: float, repeats: int) -> dict:
     return report.table(columns, cells, title="The ploughing simulation", note=note)
 
 
+# -- a cylinder against Hertz ---------------------------------------------------------
+
+# The Hertz part's series, not yet in benchmarks/harness/style.py's STYLES (which this suite
+# does not edit): drawn in these looks until they are there. FE meshes and errors are
+# jaxcontact's own (solid, filled); Hertz is a guide, (colour, linestyle).
+HERTZ_LOOKS = {
+    "FE, 12 elements across 2a": ("#2171b5", "o"),
+    "FE, 24 elements across 2a": ("#238b45", "s"),
+    "FE, 48 elements across 2a": ("#6a51a3", "D"),
+    "FE a against Hertz's": ("#084594", "^"),
+    "FE p0 against Hertz's": ("#02818a", "v"),
+    "FE p(x), relative L2": ("#7a0177", "P"),
+    "jax.grad dp0/dR against Hertz's": ("#5e3c99", "X"),
+    "jax.grad dp0/dE against Hertz's": ("#003c30", "h"),
+}
+HERTZ_GUIDE = "Hertz (Johnson 1985)"
+HERTZ_GUIDE_LOOKS = ("#1a1a1a", "-")
+# (series, the row's key of the error in %)
+HERTZ_ERRORS = (
+    ("FE a against Hertz's", "a_error_percent"),
+    ("FE p0 against Hertz's", "p0_error_percent"),
+    ("FE p(x), relative L2", "l2_error_percent"),
+    ("jax.grad dp0/dR against Hertz's", "dp0_dR_error_percent"),
+    ("jax.grad dp0/dE against Hertz's", "dp0_dE_error_percent"),
+)
+PROFILE_SPAN = 1.5  # the recorded profile: top nodes with |x| <= 1.5 a
+
+
+def _timed(call):
+    started = time.perf_counter()
+    found = jax.block_until_ready(call())
+    return found, time.perf_counter() - started
+
+
+def measure_hertz(across: int, problem: hertz.Indentation = hertz.NOMINAL) -> dict:
+    """One mesh: the solve against Hertz, ``jax.grad`` of the FE p0 against Hertz's
+    derivatives and a central difference, each timed with its compilation and again."""
+    result, first_s = _timed(lambda: hertz.solve(problem, across))
+    _, solve_s = _timed(lambda: hertz.solve(problem, across))
+    block = hertz.block(problem, across)
+    gradient = jax.jit(jax.value_and_grad(hertz.peak_pressure, argnums=1))
+    (_, grads), gradient_first_s = _timed(lambda: gradient(block, problem))
+    _, gradient_s = _timed(lambda: gradient(block, problem))
+    exact = result.exact
+    analytic = {"R": -exact.peak / (2 * problem.radius), "E": exact.peak / (2 * problem.young)}
+    row = {}
+    for key, name in (("R", "radius"), ("E", "young")):
+        nominal, found = getattr(problem, name), float(getattr(grads, name))
+        step = HERTZ_STEP * nominal
+        up, down = (
+            float(hertz.peak_pressure(block, problem._replace(**{name: nominal + change})))
+            for change in (step, -step)
+        )
+        row[f"dp0_d{key}"] = found
+        row[f"dp0_d{key}_hertz"] = analytic[key]
+        row[f"dp0_d{key}_error_percent"] = 100 * (found / analytic[key] - 1)
+        row[f"dp0_d{key}_against_fd"] = found / ((up - down) / (2 * step)) - 1
+    a, p0 = exact.half_width, exact.peak
+    shown = np.abs(result.x) <= PROFILE_SPAN * a
+    row.update(
+        across=result.across,
+        h_over_a=result.element / a,
+        nodes=result.nodes,
+        pressed=result.active,
+        a_mm=result.half_width,
+        p0_MPa=result.peak,
+        a_error_percent=100 * result.half_width_error,
+        p0_error_percent=100 * result.peak_error,
+        l2_error_percent=100 * result.l2_error,
+        penetration_over_a=result.penetration / a,
+        force_N_per_mm=result.force,
+        newton_steps=result.newton_steps,
+        residual_N_per_mm=result.residual,
+        first_s=first_s,
+        solve_s=solve_s,
+        gradient_first_s=gradient_first_s,
+        gradient_s=gradient_s,
+        hertz_a_mm=a,
+        hertz_p0_MPa=p0,
+        profile={
+            "x_over_a": [round(float(x), 6) for x in result.x[shown] / a],
+            "p_over_p0": [round(float(p), 6) for p in result.pressure[shown] / p0],
+        },
+    )
+    print(
+        f"hertz, {across} across: a {row['a_error_percent']:+.2f} %, p0 "
+        f"{row['p0_error_percent']:+.2f} %, L2 {row['l2_error_percent']:.2f} %, "
+        f"solve {solve_s:.2f} s",
+        file=sys.stderr,
+        flush=True,
+    )
+    return row
+
+
+def hertz_table(rows) -> dict:
+    columns = (
+        "elements across 2a",
+        "h / a",
+        "nodes",
+        "pressed nodes",
+        "a error %",
+        "p0 error %",
+        "L2 error %",
+        "penetration / a",
+        "dp0/dR vs Hertz %",
+        "dp0/dE vs Hertz %",
+        "jax.grad vs central difference",
+        "Newton steps",
+        "solve s",
+        "compile + first solve s",
+        "gradient s",
+    )
+    cells = [
+        [
+            row["across"],
+            round(row["h_over_a"], 4),
+            row["nodes"],
+            row["pressed"],
+            round(row["a_error_percent"], 2),
+            round(row["p0_error_percent"], 2),
+            round(row["l2_error_percent"], 2),
+            float(f"{row['penetration_over_a']:.2g}"),
+            round(row["dp0_dR_error_percent"], 2),
+            round(row["dp0_dE_error_percent"], 2),
+            float(f"{max(abs(row['dp0_dR_against_fd']), abs(row['dp0_dE_against_fd'])):.2g}"),
+            row["newton_steps"],
+            round(row["solve_s"], 3),
+            round(row["first_s"], 1),
+            round(row["gradient_s"], 3),
+        ]
+        for row in rows
+    ]
+    first = rows[0]
+    note = (
+        f"A rigid cylinder, R = {hertz.NOMINAL.radius:g} mm, pressed with P = "
+        f"{hertz.NOMINAL.force:g} N/mm into steel (E = {hertz.NOMINAL.young:g} MPa, nu = "
+        f"{hertz.NOMINAL.poisson:g}), plane strain, frictionless, float64: Hertz's a = "
+        f"{first['hertz_a_mm']:.4g} mm, p0 = {first['hertz_p0_MPa']:.4g} MPa (Johnson 1985, "
+        "eq. 4.43-4.45). Block 20a x 10a, bottom fixed, sides free; penalty 100 E*/h. "
+        "Errors: FE / Hertz - 1; a from the least-squares fit of p^2 over the pressed "
+        "nodes, p0 the node at x = 0; L2 over the contact, weighted by tributary length. "
+        "dp0/dR, dp0/dE: jax.grad of the FE p0 (implicit-function theorem) against Hertz's "
+        "-p0/2R and p0/2E; against a central difference of the FE value (step 1e-5), the "
+        "larger relative difference of the two. Times: one run each."
+    )
+    return report.table(
+        columns, cells, title="A cylinder pressed into a block, against Hertz", note=note
+    )
+
+
+def hertz_notes(rows) -> list[str]:
+    """How the errors fall from the coarsest mesh to the finest."""
+    first, last = rows[0], rows[-1]
+    falls = ", ".join(
+        f"{name} {abs(first[key]):.2f} to {abs(last[key]):.2f} %"
+        for name, key in (
+            ("a", "a_error_percent"),
+            ("p0", "p0_error_percent"),
+            ("L2", "l2_error_percent"),
+            ("dp0/dR", "dp0_dR_error_percent"),
+            ("dp0/dE", "dp0_dE_error_percent"),
+        )
+    )
+    return [
+        f"Hertz: from {first['across']} to {last['across']} elements across 2a the errors "
+        f"(absolute) go {falls}."
+    ]
+
+
+def draw_hertz(rows, profile, errors, used) -> None:
+    """The FE pressures of each mesh over Hertz's p(x) (x >= 0: the problem is symmetric),
+    and each error against the element size (log-log, a slope-1 guide)."""
+    curve = np.linspace(0, PROFILE_SPAN, 301)
+    colour, linestyle = HERTZ_GUIDE_LOOKS
+    used[HERTZ_GUIDE] = (colour, "")
+    guide = {**style.style(HERTZ_GUIDE, used, kind="guide"), "linestyle": linestyle}
+    profile.plot(curve, np.sqrt(np.clip(1 - curve**2, 0, None)), label=HERTZ_GUIDE, **guide)
+    for row in rows:
+        name = f"FE, {row['across']} elements across 2a"
+        if name in HERTZ_LOOKS:
+            used.setdefault(name, HERTZ_LOOKS[name])
+        looks = style.style(name, used, kind="jaxcontact")
+        x, p = np.array(row["profile"]["x_over_a"]), np.array(row["profile"]["p_over_p0"])
+        right = x >= 0
+        profile.plot(x[right], p[right], label=name, **{**looks, "linewidth": 0.8})
+    profile.set(xlim=(0, PROFILE_SPAN), ylim=(0, 1.12), xlabel="x / a (Hertz's a)")
+    profile.set_ylabel("contact pressure p / p0 (Hertz's p0)")
+    profile.set_title("Contact pressure against Hertz's p(x)", fontsize=9.5)
+
+    sizes = np.array([row["h_over_a"] for row in rows])
+    for name, key in HERTZ_ERRORS:
+        used.setdefault(name, HERTZ_LOOKS[name])
+        looks = style.style(name, used, kind="jaxcontact")
+        values = np.array([abs(row[key]) for row in rows])
+        errors.plot(sizes, np.maximum(values, 1e-3), label=name, **looks)
+    anchor = max(abs(rows[0]["l2_error_percent"]), 1e-3)
+    errors.plot(
+        [sizes.min(), sizes.max()],
+        [anchor * sizes.min() / sizes.max(), anchor],
+        label="slope 1",
+        **style.style("slope 1", used),
+    )
+    from matplotlib.ticker import FixedLocator, FuncFormatter, NullLocator
+
+    errors.set(xscale="log", yscale="log", xlabel="element size at the contact h / a")
+    # Ticks at the meshes' sizes and at 1-2-5 per cent, written out (no powers of ten).
+    errors.xaxis.set_major_locator(FixedLocator(sorted(sizes)))
+    errors.yaxis.set_major_locator(
+        FixedLocator([m * 10.0**k for k in range(-3, 3) for m in (1, 2, 5)])
+    )
+    for axis in (errors.xaxis, errors.yaxis):
+        axis.set_minor_locator(NullLocator())
+        axis.set_major_formatter(FuncFormatter(lambda value, _: f"{value:.3g}"))
+    errors.set_ylabel("|FE / Hertz - 1| (%)")
+    errors.set_title("Errors against the element size", fontsize=9.5)
+
+
 # -- the suite ---------------------------------------------------------------------------
 
 
@@ -283,13 +518,19 @@ def run(args) -> dict:
         for nodes in sizes
         for slaves in ("surface", "all")
     ]
-    notes = [*cutting_notes(runs), f"Whole run {time.perf_counter() - started:.0f} s."]
-    return {
-        "title": TITLE,
-        "tables": [cutting_table(runs), ploughing_table(ploughing, travel, repeats)],
-        "data": {"cutting": runs, "ploughing": ploughing},
-        "notes": notes,
-    }
+    indentation = [measure_hertz(across) for across in HERTZ["quick" if args.quick else "full"]]
+    notes = [
+        *cutting_notes(runs),
+        *hertz_notes(indentation),
+        f"Whole run {time.perf_counter() - started:.0f} s.",
+    ]
+    tables = [
+        cutting_table(runs),
+        ploughing_table(ploughing, travel, repeats),
+        hertz_table(indentation),
+    ]
+    data = {"cutting": runs, "ploughing": ploughing, "hertz": indentation}
+    return {"title": TITLE, "tables": tables, "data": data, "notes": notes}
 
 
 MERCHANT, KIENZLE, SEARCH = "Merchant", "Kienzle (Ck45)", "Search.closest (reused state)"
@@ -297,12 +538,15 @@ MERCHANT, KIENZLE, SEARCH = "Merchant", "Kienzle (Ck45)", "Search.closest (reuse
 
 def draw(record, plt):
     """The cutting and thrust forces against travel, Merchant's and Kienzle's forces beside
-    them, the steady window shaded; below, detection's share of a step in every run."""
+    them, the steady window shaded; below, detection's share of a step in every run; then
+    (in records that have it) the Hertz part: the pressure profiles and the errors."""
     runs, ploughing = record["data"]["cutting"], record["data"]["ploughing"]
+    indentation = record["data"].get("hertz")  # records before the Hertz part have none
     labels = [f"cutting, {run['label']}" for run in runs]
     labels += [f"ploughing, {r['nodes']:,} nodes, {r['slaves']} slaves" for r in ploughing]
-    figure = plt.figure(figsize=(11, 6.2 + 0.28 * len(labels)), dpi=120)
-    grid = figure.add_gridspec(2, 2, height_ratios=(3, 0.8 + 0.3 * len(labels)))
+    heights = [3, 0.8 + 0.3 * len(labels)] + ([3] if indentation else [])
+    figure = plt.figure(figsize=(11, 6.2 + 0.28 * len(labels) + 1.3 * sum(heights[2:])), dpi=120)
+    grid = figure.add_gridspec(len(heights), 2, height_ratios=heights)
     forces = [figure.add_subplot(grid[0, 0]), figure.add_subplot(grid[0, 1])]
     used = {}
     for axes, key, merchant, name in (
@@ -351,11 +595,16 @@ def draw(record, plt):
     axes.axvline(0, color="#555555", linewidth=0.8)
     axes.set_xlabel("share of a step in contact detection, Search.closest (%)")
     axes.set_title("Contact detection's share of a simulation step", fontsize=9.5)
-    figure.suptitle(
+    title = (
         "Orthogonal cutting against Merchant and Kienzle (band: Kienzle's handbook span); "
-        "contact detection's share of a step",
-        fontsize=10.5,
+        "contact detection's share of a step"
     )
+    if indentation:
+        panels = [figure.add_subplot(grid[2, 0]), figure.add_subplot(grid[2, 1])]
+        draw_hertz(indentation, *panels, used)
+        style.legend_outside(panels[1], "right", panels=panels)
+        title += ";\na rigid cylinder pressed into an elastic block against Hertz"
+    figure.suptitle(title, fontsize=10.5)
     return figure
 
 

@@ -7,8 +7,10 @@ writes summary.json, chip.png, forces.png and chip.gif);
 (``jaxcontact.sim.demo``); ``jaxcontact demo --scene paper`` runs the source
 paper's scene (the repository's docs/scenes.md, Test 1) through both
 exhaustive detectors (``all_to_all``, ``swept``), prints what they found and
-how long they took, and draws the scene near the tool tip. An option of one
-scene given with another is refused. ``jaxcontact bench`` times
+how long they took, and draws the scene near the tool tip; ``jaxcontact demo
+--scene hertz`` presses a rigid cylinder into an elastic block
+(``jaxcontact.sim.hertz``), prints a and p0 against Hertz's and draws the
+pressure. An option of one scene given with another is refused. ``jaxcontact bench`` times
 jaxcontact's own forms on the reference scenes (``jaxcontact._selftime``);
 the comparisons with other libraries are the repository's ``benchmarks/``
 folder, not installed. Each subcommand is registered in ``_parser``.
@@ -20,6 +22,7 @@ import argparse
 import functools
 import os
 import sys
+import time
 
 import jax
 import numpy as np
@@ -29,6 +32,7 @@ from jaxcontact._timing import pinned_note, time_call
 from jaxcontact.scenes import paper_scene
 from jaxcontact.sim import cutting_demo as _cutting_demo
 from jaxcontact.sim import demo as _demo_sim
+from jaxcontact.sim import hertz as _hertz
 
 # Drawn around the tool tip T = (50.9, 7): the rake and clearance faces, the
 # nodes pushed into them and the paths that cross them all fall inside.
@@ -36,6 +40,8 @@ _ZOOM_X = (45.0, 56.0)
 _ZOOM_Y = (5.5, 11.5)
 # One drawn path per this many crossed nodes: every path would fill the band solid.
 _PATH_STRIDE = 12
+# --scene hertz's mesh: elements across the contact width 2a.
+HERTZ_ACROSS = 24
 
 
 def _demo(args: argparse.Namespace) -> int:
@@ -43,6 +49,8 @@ def _demo(args: argparse.Namespace) -> int:
         return _cutting_demo.main(args)
     if args.scene == "ploughing":
         return _demo_sim.main(args)
+    if args.scene == "hertz":
+        return _hertz_demo(args)
     if args.dtype == "float64":
         jax.config.update("jax_enable_x64", True)
     scene = paper_scene(args.n, length=10.0, d=5.0, dtype=np.dtype(args.dtype))
@@ -148,10 +156,107 @@ def _draw(scene, contact, crossing, path: str) -> None:
     plt.close(figure)
 
 
+def _hertz_demo(args: argparse.Namespace) -> int:
+    """Solves the indentation at ``--across`` elements across the contact, prints the FE
+    a and p0 against Hertz's, and draws the pressure profile."""
+    jax.config.update("jax_enable_x64", True)  # the scene needs float64 (hertz.solve says why)
+    problem = _hertz.Indentation()
+    started = time.perf_counter()
+    result = _hertz.solve(problem, args.across)
+    first_s = time.perf_counter() - started
+    started = time.perf_counter()
+    _hertz.solve(problem, args.across)  # compiled: the solve alone
+    solve_s = time.perf_counter() - started
+    exact = result.exact
+    print(
+        f"hertz: rigid cylinder R={problem.radius:g} mm pressed with P={problem.force:g} N/mm "
+        f"into a block E={problem.young:g} MPa, nu={problem.poisson:g} (plane strain, "
+        "frictionless, float64)"
+    )
+    print(
+        f"block 20a x 10a, bottom fixed, sides free: {result.nodes:,} nodes, "
+        f"{result.across} elements across 2a (h = {result.element:.4g} mm = "
+        f"{result.element / exact.half_width:.3g} a); penalty "
+        f"{_hertz.Solver().penalty:g} E*/h"
+    )
+    print(f"jax {jax.__version__} on {jax.devices()[0].device_kind}; {pinned_note()}")
+    print("                 FE          Hertz       error")
+    print(
+        f"  a (mm)        {result.half_width:<11.5g} {exact.half_width:<11.5g} "
+        f"{100 * result.half_width_error:+.2f} %"
+    )
+    print(
+        f"  p0 (MPa)      {result.peak:<11.5g} {exact.peak:<11.5g} {100 * result.peak_error:+.2f} %"
+    )
+    print(f"  p(x), relative L2 error over the contact: {100 * result.l2_error:.2f} %")
+    print(
+        f"  {result.active} nodes pressed; deepest penetration "
+        f"{result.penetration / exact.half_width:.2g} a; contact force {result.force:.6g} N/mm"
+    )
+    print(
+        f"  Newton: {result.newton_steps} steps, force residual {result.residual:.2g} N/mm; "
+        f"{first_s:.1f} s with compilation, {solve_s:.2f} s compiled"
+    )
+    try:
+        import matplotlib
+    except ImportError:
+        print('PNG skipped: matplotlib is not installed (pip install "jaxcontact[bench]").')
+        return 0
+    matplotlib.use("Agg")
+    os.makedirs(args.out, exist_ok=True)
+    path = os.path.join(args.out, f"hertz_pressure_{result.across}.png")
+    _draw_hertz(result, path)
+    print(f"wrote {path}")
+    return 0
+
+
+def _draw_hertz(result, path: str) -> None:
+    """The FE nodal pressures over Hertz's p(x), and their difference, into ``path``."""
+    import matplotlib.pyplot as plt
+
+    exact = result.exact
+    a, p0 = exact.half_width, exact.peak
+    shown = np.abs(result.x) <= 1.5 * a
+    x = result.x[shown] / a
+    curve = np.linspace(-1.5, 1.5, 601)
+    figure, (profile, difference) = plt.subplots(
+        2, 1, figsize=(8, 7), dpi=150, sharex=True, height_ratios=(3, 1.3), layout="constrained"
+    )
+    profile.plot(curve, exact.pressure(curve * a) / p0, c="black", lw=1.2, label="Hertz p(x)")
+    profile.plot(x, result.pressure[shown] / p0, "o", c="tab:blue", ms=4, label="FE nodal pressure")
+    profile.set(ylabel="p / p0 (Hertz's)", ylim=(0, 1.15))
+    profile.legend(loc="upper right", fontsize=8)
+    profile.set_title(
+        f"{result.across} elements across 2a: a {100 * result.half_width_error:+.2f} %, "
+        f"p0 {100 * result.peak_error:+.2f} %, L2 {100 * result.l2_error:.2f} %",
+        fontsize=10,
+    )
+    error = (result.pressure[shown] - exact.pressure(result.x[shown])) / p0
+    difference.axhline(0, c="black", lw=0.8)
+    difference.plot(x, error, "o-", c="tab:blue", ms=3, lw=0.8)
+    difference.set(xlabel="x / a (Hertz's a)", ylabel="(FE - Hertz) / p0")
+    problem = result.problem
+    figure.suptitle(
+        f"Rigid cylinder (R = {problem.radius:g} mm, P = {problem.force:g} N/mm) on an elastic "
+        f"block (E = {problem.young:g} MPa, ν = {problem.poisson:g}):\n"
+        "the contact pressure against Hertz's (Johnson 1985, §4.3), plane strain",
+        fontsize=10,
+    )
+    figure.savefig(path)
+    plt.close(figure)
+
+
 def _positive_int(text: str) -> int:
     value = int(text)
     if value < 1:
         raise argparse.ArgumentTypeError(f"must be at least 1; got {value}")
+    return value
+
+
+def _at_least_two(text: str) -> int:
+    value = int(text)
+    if value < 2:
+        raise argparse.ArgumentTypeError(f"must be at least 2; got {value}")
     return value
 
 
@@ -189,7 +294,7 @@ def _parser() -> argparse.ArgumentParser:
     commands = parser.add_subparsers(dest="command", required=True)
     demo = commands.add_parser(
         "demo",
-        help="run the cutting simulation (or --scene ploughing, --scene paper) and draw it",
+        help="run the cutting simulation (or --scene ploughing, paper, hertz) and draw it",
         description="Runs a simulation or a scene and draws it: by default the orthogonal "
         "cutting simulation (a chip forms), which prints its summary and writes summary.json, "
         "chip.png, forces.png and chip.gif into --out. Each option below its scene's heading "
@@ -197,10 +302,11 @@ def _parser() -> argparse.ArgumentParser:
     )
     demo.add_argument(
         "--scene",
-        choices=("cutting", "ploughing", "paper"),
+        choices=("cutting", "ploughing", "paper", "hertz"),
         default="cutting",
         help="cutting: orthogonal cutting, a chip forms (default); ploughing: a tool ploughing "
-        "an elastic workpiece; paper: the paper's scene, Test 1",
+        "an elastic workpiece; paper: the paper's scene, Test 1; hertz: a cylinder pressed "
+        "into an elastic block, against Hertz (always float64)",
     )
     demo.add_argument("--out", default="jaxcontact-demo", help="folder for the files it writes")
     demo.add_argument(
@@ -220,8 +326,16 @@ def _parser() -> argparse.ArgumentParser:
     _demo_sim.add_arguments(ploughing, travel=False)
     paper = _Options(demo, "paper (--scene paper)")
     paper.add_argument("--n", type=_positive_int, default=250, help="(n+1)^2 nodes (default 250)")
+    hertz = _Options(demo, "hertz (--scene hertz)")
+    hertz.add_argument(
+        "--across",
+        type=_at_least_two,
+        default=HERTZ_ACROSS,
+        help=f"elements across the contact width 2a (default {HERTZ_ACROSS})",
+    )
     scenes = {"--travel": ("travel", None, ("cutting", "ploughing"))}
-    for name, options in (("cutting", cutting), ("ploughing", ploughing), ("paper", paper)):
+    groups = (("cutting", cutting), ("ploughing", ploughing), ("paper", paper), ("hertz", hertz))
+    for name, options in groups:
         for action in options.actions:
             scenes[action.option_strings[0]] = (action.dest, action.default, (name,))
     demo.set_defaults(run=_demo, check=functools.partial(_check_demo, demo, scenes))

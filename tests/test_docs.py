@@ -34,6 +34,12 @@ SMALLER = {
             "print(jax.grad(force, argnums=(0, 1))(math.radians(5.0), 0.3))",
             "value = force(math.radians(5.0), 0.3)",
         ),
+        # tests/sim/test_hertz.py checks this gradient; here the value, whose program the
+        # solve above compiled.
+        (
+            "print(jax.grad(hertz.peak_pressure, argnums=1)(block, problem))",
+            "peak = hertz.peak_pressure(block, problem)",
+        ),
     ],
 }
 
@@ -66,6 +72,8 @@ CHECKS = {
         0 < float(ns["value"]) < 1000  # N per mm: the tool pushes into the layer
         and float(ns["history"].force[:, 0].mean()) > 0  # the tool pushes the workpiece in -x
         and all(bool(abs(g) > 0) for g in (ns["grads"].rake, ns["grads"].stiffness))
+        and ns["result"].l2_error < 0.05  # the Hertz indentation: the target
+        and float(ns["peak"]) == ns["result"].peak
     ),
 }
 

@@ -1,8 +1,11 @@
 """A rigid tool ploughing an elastic workpiece: jaxcontact inside a JAX simulation.
 
+Also ``jaxcontact.sim.hertz``: a rigid cylinder pressed into an elastic
+block, solved to equilibrium by Newton's method and set against Hertz.
 Apart from the detection library: it uses only jaxcontact's public names.
 """
 
+from jaxcontact.sim import hertz as hertz
 from jaxcontact.sim.elastic import Material as Material
 from jaxcontact.sim.elastic import Mesh as Mesh
 from jaxcontact.sim.elastic import workpiece_mesh as workpiece_mesh

@@ -1,13 +1,15 @@
 """Linear triangles, plane strain, linear elastic: the workpiece of ``simulate``.
 
-Not a general finite-element code: one mesh (the cutting scene's grid, each
-cell cut into two triangles), one material law, lumped masses. Everything an
+Not a general finite-element code: two meshes (the cutting scene's grid,
+each cell cut into two triangles, and ``hertz``'s graded block, both built
+by ``triangle_mesh``), one material law, lumped masses. Everything an
 element needs that does not change over a run (shape-function gradients,
 areas, masses) is computed once on the host; a step gathers the element's
 node displacements, computes its stresses and scatters its nodal forces with
-``.at[].add``. Small strain: the model is linear in the displacement, so it
-is right for the small deformations near the tool and wrong (not objective)
-for large rotations.
+``.at[].add``; a static solve minimises ``strain_energy`` instead. Small
+strain: the model is linear in the displacement, so it is right for the
+small deformations near the tool and wrong (not objective) for large
+rotations.
 
 Units: mm, N, tonne, s (so stresses in MPa and densities in t/mm³). Plane
 strain per 1 mm of thickness: forces are N per mm of width.
@@ -87,9 +89,39 @@ def workpiece_mesh(num_nodes: int, material: Material, *, dtype=jnp.float32) -> 
     upper = np.stack([corner, corner + nx + 1, corner + nx], axis=-1)
     triangles = np.concatenate([lower, upper]).astype(np.int32)
 
+    rows = np.arange(ny)[:, None] * nx + np.arange(nx)[None, :]
+    boundary = np.concatenate([rows[1:, 0], rows[-1, 1:], rows[-2:0:-1, -1]])
+    return triangle_mesh(nodes, triangles, nodes[:, 1] > 0, boundary, material, dtype=dtype)
+
+
+def triangle_mesh(
+    nodes: np.ndarray,
+    triangles: np.ndarray,
+    free: np.ndarray,
+    boundary: np.ndarray,
+    material: Material,
+    *,
+    dtype=jnp.float32,
+) -> Mesh:
+    """A ``Mesh`` of any linear triangles, with what its elements need computed on the host.
+
+    Args:
+      nodes: f[N, 2] reference coordinates (mm).
+      triangles: int[E, 3] node indices, counter-clockwise (positive areas).
+      free: bool[N], False on fixed nodes.
+      boundary: int[B] the free outline's nodes in order along it.
+      material: gives the lumped masses (a third of each element's to each node).
+      dtype: the float dtype of the arrays.
+    """
+    nodes, triangles = np.asarray(nodes, np.float64), np.asarray(triangles, np.int32)
     corners = nodes[triangles]  # (E, 3, 2)
     edge_1, edge_2 = corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]
     twice_area = edge_1[:, 0] * edge_2[:, 1] - edge_1[:, 1] * edge_2[:, 0]
+    if not (twice_area > 0).all():
+        raise ValueError(
+            "triangles must be counter-clockwise (positive areas); got "
+            f"{int((twice_area <= 0).sum())} of {len(triangles)} that are not"
+        )
     # Linear shape functions: grad N_a = (y_b - y_c, x_c - x_b) / 2A over the
     # cyclic triples (a, b, c).
     following, opposite = corners[:, [1, 2, 0]], corners[:, [2, 0, 1]]
@@ -102,16 +134,14 @@ def workpiece_mesh(num_nodes: int, material: Material, *, dtype=jnp.float32) -> 
     area = twice_area / 2
     mass = np.zeros(len(nodes))
     np.add.at(mass, triangles, (material.density * material.mass_scale * area / 3)[:, None])
-    rows = np.arange(ny)[:, None] * nx + np.arange(nx)[None, :]
-    boundary = np.concatenate([rows[1:, 0], rows[-1, 1:], rows[-2:0:-1, -1]]).astype(np.int32)
     return Mesh(
         jnp.asarray(nodes, dtype),
         jnp.asarray(triangles),
         jnp.asarray(gradients, dtype),
         jnp.asarray(area, dtype),
         jnp.asarray(mass, dtype),
-        jnp.asarray(nodes[:, 1] > 0),
-        jnp.asarray(boundary),
+        jnp.asarray(free, bool),
+        jnp.asarray(boundary, np.int32),
     )
 
 
@@ -140,6 +170,20 @@ def internal_forces(mesh: Mesh, displacement: Array, material: Material) -> Arra
     sigma = stresses(mesh, displacement, material)
     per_node = -mesh.area[:, None, None] * jnp.einsum("eij,eaj->eai", sigma, mesh.gradients)
     return jnp.zeros_like(displacement).at[mesh.triangles].add(per_node)
+
+
+def strain_energy(mesh: Mesh, displacement: Array, material: Material) -> Array:
+    """f[]: the elastic strain energy ``Σ_e A_e (μ ε:ε + λ/2 tr(ε)²)`` (N mm per mm of thickness).
+
+    Its gradient with respect to ``displacement`` is ``-internal_forces``; the
+    material's moduli may be traced (``jax.grad`` with respect to E or ν).
+    """
+    lam, mu = material.lame
+    gradient = jnp.einsum("eai,eaj->eij", displacement[mesh.triangles], mesh.gradients)
+    strain = (gradient + jnp.swapaxes(gradient, 1, 2)) / 2
+    trace = strain[:, 0, 0] + strain[:, 1, 1]
+    density = mu * jnp.sum(strain**2, axis=(1, 2)) + lam / 2 * trace**2
+    return jnp.sum(mesh.area * density)
 
 
 def von_mises(sigma: Array, material: Material) -> Array:

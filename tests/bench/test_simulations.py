@@ -2,9 +2,9 @@
 summary it records from the coarse cut tests/sim/test_cutting.py runs.
 
 Nothing is timed and no full simulation is run: the suite's measurements are
-``cutting.run``, ``cutting.summary``, ``cutting.detection_share`` and ``demo.run_demo``,
-which tests/sim tests; here are tested what the suite adds (the force trace, the tables, the
-notes, the figure).
+``cutting.run``, ``cutting.summary``, ``cutting.detection_share``, ``demo.run_demo`` and
+``hertz.solve``, which tests/sim tests; here are tested what the suite adds (the force
+trace, the tables, the notes, the figure).
 """
 
 import json
@@ -69,8 +69,46 @@ def _ploughing(nodes, slaves, share):
     return simulations.ploughing_row(summary, 296, timed, untimed, slaves)
 
 
-@pytest.fixture
-def record():
+def _hertz(across, error):
+    """One mesh of the Hertz part as ``measure_hertz`` records it: errors ``error`` % (a, p0),
+    four times that (L2), ten times (the gradient); a profile of Hertz's shape."""
+    x = np.linspace(-1.5, 1.5, 2 * across + 1)
+    return {
+        "across": across,
+        "h_over_a": 2 / across,
+        "nodes": 40 * across,
+        "pressed": across + 1,
+        "a_mm": 0.236,
+        "p0_MPa": 2730.0,
+        "a_error_percent": error,
+        "p0_error_percent": -error,
+        "l2_error_percent": 4 * error,
+        "penetration_over_a": 2e-5,
+        "force_N_per_mm": 1000.0,
+        "newton_steps": 3,
+        "residual_N_per_mm": 1e-9,
+        "first_s": 12.0,
+        "solve_s": 0.1,
+        "gradient_first_s": 20.0,
+        "gradient_s": 0.15,
+        "hertz_a_mm": 0.2349,
+        "hertz_p0_MPa": 2710.3,
+        "dp0_dR": -140.0,
+        "dp0_dR_hertz": -135.5,
+        "dp0_dR_error_percent": 10 * error,
+        "dp0_dR_against_fd": 4e-7,
+        "dp0_dE": 0.0069,
+        "dp0_dE_hertz": 0.00645,
+        "dp0_dE_error_percent": -10 * error,
+        "dp0_dE_against_fd": -1.5e-6,
+        "profile": {
+            "x_over_a": x.tolist(),
+            "p_over_p0": np.sqrt(np.clip(1 - x**2, 0, None)).tolist(),
+        },
+    }
+
+
+def _record(hertz=True):
     runs = [
         _run("default (400x mass)", "simulation, 400x mass", 209.3, 400.0),
         _run("half the scaling (200x)", "simulation, 200x mass", 209.5, 200.0),
@@ -82,12 +120,22 @@ def record():
     ]
     data = {"cutting": runs, "ploughing": ploughing}
     notes = simulations.cutting_notes(runs)
+    if hertz:
+        meshes = [_hertz(12, 0.8), _hertz(24, 0.3), _hertz(48, 0.2)]
+        tables.append(simulations.hertz_table(meshes))
+        data["hertz"] = meshes
+        notes += simulations.hertz_notes(meshes)
     rec = report.record("simulations", simulations.TITLE, tables, data=data, notes=notes)
     return json.loads(json.dumps(rec, allow_nan=False))  # as read back from the file
 
 
+@pytest.fixture
+def record():
+    return _record()
+
+
 def test_the_tables_and_notes(record):
-    cut, plough = record["tables"]
+    cut, plough, indentation = record["tables"]
     assert cut["columns"] == ["quantity", "default (400x mass)", "half the scaling (200x)"]
     assert len(cut["rows"]) == len(simulations.QUANTITIES)
     rows = {row[0]: row[1:] for row in cut["rows"]}
@@ -96,9 +144,16 @@ def test_the_tables_and_notes(record):
     assert rows["contact detection's share of a step (%)"] == [18.0, 18.0]
     assert plough["rows"][0][:2] == [10_000, "surface (296)"]
     assert plough["rows"][1][plough["columns"].index("detection %")] == -2.0
-    kienzle, mass = record["notes"]
+    kienzle, mass, hertz = record["notes"]
     assert "207 to 306 N/mm" in kienzle and "0.68 of Kienzle's" in kienzle
     assert "halving it changed F_c by +0.1 %" in mass
+    rows = [dict(zip(indentation["columns"], row, strict=True)) for row in indentation["rows"]]
+    assert [row["elements across 2a"] for row in rows] == [12, 24, 48]
+    assert rows[0]["h / a"] == 0.1667 and rows[0]["p0 error %"] == -0.8
+    assert rows[1]["L2 error %"] == 1.2 and rows[2]["dp0/dE vs Hertz %"] == -2.0
+    assert rows[0]["jax.grad vs central difference"] == 1.5e-6
+    assert "Hertz's a = 0.2349 mm, p0 = 2710 MPa" in indentation["note"]
+    assert "from 12 to 48 elements across 2a" in hertz and "L2 3.20 to 0.80 %" in hertz
 
 
 def test_the_figure_draws_from_the_record_alone(record):
@@ -111,15 +166,23 @@ def test_the_figure_draws_from_the_record_alone(record):
             labels |= {line.get_label() for line in axes.lines}
             labels |= {bars.get_label() for bars in axes.containers}
         labels = {label for label in labels if not label.startswith("_")}
+        hertz = {f"FE, {n} elements across 2a" for n in (12, 24, 48)}
+        hertz |= {name for name, _ in simulations.HERTZ_ERRORS}
         assert labels == {
             "simulation, 400x mass",
             "simulation, 200x mass",
             simulations.MERCHANT,
             simulations.KIENZLE,
             simulations.SEARCH,
+            simulations.HERTZ_GUIDE,
+            "slope 1",
+            *hertz,
         }
+        # The Hertz part's names wait for benchmarks/harness/style.py's STYLES
+        # (simulations.HERTZ_LOOKS); every other is there.
+        pending = {*simulations.HERTZ_LOOKS, simulations.HERTZ_GUIDE}
         missing = {label for label in labels if style.canonical(label) not in style.STYLES}
-        assert not missing, f"series not in benchmarks/harness/style.py's STYLES: {missing}"
+        assert missing <= pending, f"not in benchmarks/harness/style.py's STYLES: {missing}"
         legend = figure.axes[1].get_legend()
         for axes in figure.axes:
             assert not legend.get_window_extent().overlaps(axes.bbox)
@@ -127,6 +190,39 @@ def test_the_figure_draws_from_the_record_alone(record):
         assert [t.get_text() for t in shares.get_yticklabels()][-1] == (
             "ploughing, 10,000 nodes, all slaves"
         )
+        # The Hertz panels: each mesh's profile and the errors, drawn in their own looks.
+        profile, errors = figure.axes[3:5]
+        drawn = {line.get_label(): line for line in profile.lines + errors.lines}
+        for name, (colour, marker) in simulations.HERTZ_LOOKS.items():
+            if name in drawn:
+                assert (drawn[name].get_color(), drawn[name].get_marker()) == (colour, marker)
+        assert errors.get_xscale() == errors.get_yscale() == "log"
+        assert min(errors.get_xlim()) > 0 and profile.get_xlim()[0] == 0
+        legends = [axes.get_legend() for axes in figure.axes if axes.get_legend()]
+        assert len(legends) == 2
+        for legend in legends:
+            for axes in figure.axes:
+                assert not legend.get_window_extent().overlaps(axes.bbox)
+    finally:
+        plt.close(figure)
+
+
+def test_the_pending_looks_are_new_and_distinct():
+    # What style.py's table would take: no colour of the table, none twice.
+    looks = {**simulations.HERTZ_LOOKS, simulations.HERTZ_GUIDE: simulations.HERTZ_GUIDE_LOOKS}
+    colours = [colour for colour, _ in looks.values()]
+    assert len(set(colours)) == len(colours)
+    assert not set(colours) & {colour for colour, _ in style.STYLES.values()}
+    assert not set(looks) & set(style.STYLES)
+
+
+def test_a_record_without_the_hertz_part_draws_as_before():
+    plt = report.pyplot()
+    figure = simulations.draw(_record(hertz=False), plt)
+    try:
+        figure.canvas.draw()
+        assert len(figure.axes) == 3
+        assert figure.get_size_inches()[1] == pytest.approx(6.2 + 0.28 * 4)
     finally:
         plt.close(figure)
 

@@ -107,6 +107,9 @@ def test_other_scenes_keep_their_options():
     args = _demo_args("--scene", "paper", "--n", "9", "--dtype", "float64")
     args.check(args)
     assert (args.n, args.dtype, args.travel) == (9, "float64", None)
+    args = _demo_args("--scene", "hertz", "--across", "48")
+    args.check(args)
+    assert (args.across, args.n) == (48, 250)
 
 
 @pytest.mark.parametrize(
@@ -130,6 +133,10 @@ def test_other_scenes_keep_their_options():
         (["--scene", "paper", "--travel", "1"], "--travel is an option of --scene cutting and"),
         (["--scene", "paper", "--nodes", "3000"], "--nodes is an option of --scene ploughing"),
         (["--scene", "cutting", "--n", "9"], "--n is an option of --scene paper"),
+        (["--across", "12"], "--across is an option of --scene hertz, not of --scene cutting"),
+        (["--scene", "hertz", "--n", "9"], "--n is an option of --scene paper"),
+        (["--scene", "hertz", "--travel", "1"], "--travel is an option of --scene cutting and"),
+        (["--scene", "hertz", "--across", "1"], "argument --across: must be at least 2"),
     ],
 )
 def test_bad_options_are_argparse_errors(argv, message, capsys):
