@@ -85,6 +85,10 @@ OPTIONS = ((("--fine",), {"action": "store_true", "help": "also cut at half the 
 QUANTITIES = (
     ("cutting force F_c (N/mm)", "cutting_force_N_per_mm", 1),
     ("thrust force F_t (N/mm)", "thrust_force_N_per_mm", 1),
+    ("forces steady over the averaging window", "forces_steady", None),
+    ("averaging window from (mm of travel)", "window_from_mm", 3),
+    ("F_c's drift over the window (%)", "cutting_force_drift_percent", 1),
+    ("F_t's drift over the window (%)", "thrust_force_drift_percent", 1),
     ("chip thickness ratio h_c / h", "chip_thickness_ratio", 2),
     ("shear angle from the chip (°)", "shear_angle_deg", 1),
     ("friction angle from the forces (°)", "friction_angle_deg", 1),
@@ -147,19 +151,18 @@ def trace(travel, force, points: int = POINTS) -> dict:
 def summarise(model, state, record, frames, seconds, label: str, series: str) -> dict:
     """A cutting run's summary (``cutting.summary``) with what the record adds: its label
     and series, the element, the own contacts left out, the force trace and where the
-    steady window (the last 40 % of the steps) begins."""
+    forces' averaging window begins (``cutting.steady_window``: the steady state where the
+    run reaches one, else the last 40 % of the steps)."""
     summary = cutting.summary(model, state, record, frames, seconds, 0.0, cutting.MU)
     steps = len(record.force)
     at = np.arange(1, steps + 1)
-    lowest = np.asarray(cutting.tool_position(model.cut, model.start_x, at), np.float64)
-    travel = model.start_x - lowest
-    window = max(1, round(0.4 * steps))
+    travel = cutting.tool_travel(model.cut, at)
     summary.update(
         label=label,
         series=series,
         element_mm=model.cut.element,
         dropped_own_contacts=int(np.sum(record.dropped)),
-        window_from_mm=float(travel[steps - window]),
+        window_from_mm=float(summary["force_window_mm"][0]),
         trace=trace(travel, record.force),
     )
     return summary
@@ -204,7 +207,9 @@ def cutting_table(runs) -> dict:
         f" mm, rake {base['rake_deg']:g}°, clearance 7°, edge radius 2 µm, mu = "
         f"{base['friction']:g} capped at {base['friction_shear_factor']:g} of A/sqrt 3 "
         f"(Zorev's sticking zone), plane strain, {base['element_mm'] * 1000:g} µm elements. "
-        "Forces per mm of width, means over the last 40 % of the steps; one run of each. "
+        "Forces per mm of width, means over the steady state where the run reaches one "
+        "(`cutting.steady_window`: a window to the run's end whose least-squares line drifts "
+        "by at most 5 %), else over the last 40 % of the steps, with the drift; one run of each. "
         "A published experiment is not compared here (the module's docstring says why)."
     )
     return report.table(columns, cells, title="Orthogonal cutting, AISI 1045", note=note)
@@ -290,21 +295,7 @@ def ploughing_table(rows, travel: float, repeats: int) -> dict:
 
 # -- a cylinder against Hertz ---------------------------------------------------------
 
-# The Hertz part's series, not yet in benchmarks/harness/style.py's STYLES (which this suite
-# does not edit): drawn in these looks until they are there. FE meshes and errors are
-# jaxcontact's own (solid, filled); Hertz is a guide, (colour, linestyle).
-HERTZ_LOOKS = {
-    "FE, 12 elements across 2a": ("#2171b5", "o"),
-    "FE, 24 elements across 2a": ("#238b45", "s"),
-    "FE, 48 elements across 2a": ("#6a51a3", "D"),
-    "FE a against Hertz's": ("#084594", "^"),
-    "FE p0 against Hertz's": ("#02818a", "v"),
-    "FE p(x), relative L2": ("#7a0177", "P"),
-    "jax.grad dp0/dR against Hertz's": ("#5e3c99", "X"),
-    "jax.grad dp0/dE against Hertz's": ("#003c30", "h"),
-}
 HERTZ_GUIDE = "Hertz (Johnson 1985)"
-HERTZ_GUIDE_LOOKS = ("#1a1a1a", "-")
 # (series, the row's key of the error in %)
 HERTZ_ERRORS = (
     ("FE a against Hertz's", "a_error_percent"),
@@ -461,14 +452,10 @@ def draw_hertz(rows, profile, errors, used) -> None:
     """The FE pressures of each mesh over Hertz's p(x) (x >= 0: the problem is symmetric),
     and each error against the element size (log-log, a slope-1 guide)."""
     curve = np.linspace(0, PROFILE_SPAN, 301)
-    colour, linestyle = HERTZ_GUIDE_LOOKS
-    used[HERTZ_GUIDE] = (colour, "")
-    guide = {**style.style(HERTZ_GUIDE, used, kind="guide"), "linestyle": linestyle}
+    guide = style.style(HERTZ_GUIDE, used, kind="guide")
     profile.plot(curve, np.sqrt(np.clip(1 - curve**2, 0, None)), label=HERTZ_GUIDE, **guide)
     for row in rows:
         name = f"FE, {row['across']} elements across 2a"
-        if name in HERTZ_LOOKS:
-            used.setdefault(name, HERTZ_LOOKS[name])
         looks = style.style(name, used, kind="jaxcontact")
         x, p = np.array(row["profile"]["x_over_a"]), np.array(row["profile"]["p_over_p0"])
         right = x >= 0
@@ -479,7 +466,6 @@ def draw_hertz(rows, profile, errors, used) -> None:
 
     sizes = np.array([row["h_over_a"] for row in rows])
     for name, key in HERTZ_ERRORS:
-        used.setdefault(name, HERTZ_LOOKS[name])
         looks = style.style(name, used, kind="jaxcontact")
         values = np.array([abs(row[key]) for row in rows])
         errors.plot(sizes, np.maximum(values, 1e-3), label=name, **looks)

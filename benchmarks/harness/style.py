@@ -50,6 +50,15 @@ JAXCONTACT = {
     "Search.closest (whole search)": ("#8073ac", "o"),
     "Search.closest (compact, whole search)": ("#2d004b", "s"),
     "Search.closest (whole search, cell lists in chunks)": ("#dd3497", "H"),
+    # The Hertz indentation (benchmarks/simulations.py): meshes and errors.
+    "FE, 12 elements across 2a": ("#2171b5", "o"),
+    "FE, 24 elements across 2a": ("#238b45", "s"),
+    "FE, 48 elements across 2a": ("#6a51a3", "D"),
+    "FE a against Hertz's": ("#084594", "^"),
+    "FE p0 against Hertz's": ("#02818a", "v"),
+    "FE p(x), relative L2": ("#7a0177", "P"),
+    "jax.grad dp0/dR against Hertz's": ("#5e3c99", "X"),
+    "jax.grad dp0/dE against Hertz's": ("#003c30", "h"),
     # benchmarks/simulations.py: the cutting runs.
     "simulation, 400x mass": ("#08519c", "o"),
     "simulation, 200x mass": ("#41ab5d", "s"),
@@ -96,6 +105,7 @@ GUIDES = {
     "float64 bound": ("#74b9dc", ":"),
     "Merchant": ("#4d4d4d", "--"),
     "Kienzle (Ck45)": ("#a6761d", "-."),
+    "Hertz (Johnson 1985)": ("#1a1a1a", "-"),
 }
 # Other names for a series of the table: the benchmarks' labels over time.
 ALIASES = {

@@ -178,11 +178,8 @@ def test_the_figure_draws_from_the_record_alone(record):
             "slope 1",
             *hertz,
         }
-        # The Hertz part's names wait for benchmarks/harness/style.py's STYLES
-        # (simulations.HERTZ_LOOKS); every other is there.
-        pending = {*simulations.HERTZ_LOOKS, simulations.HERTZ_GUIDE}
         missing = {label for label in labels if style.canonical(label) not in style.STYLES}
-        assert missing <= pending, f"not in benchmarks/harness/style.py's STYLES: {missing}"
+        assert not missing, f"not in benchmarks/harness/style.py's STYLES: {missing}"
         legend = figure.axes[1].get_legend()
         for axes in figure.axes:
             assert not legend.get_window_extent().overlaps(axes.bbox)
@@ -190,12 +187,12 @@ def test_the_figure_draws_from_the_record_alone(record):
         assert [t.get_text() for t in shares.get_yticklabels()][-1] == (
             "ploughing, 10,000 nodes, all slaves"
         )
-        # The Hertz panels: each mesh's profile and the errors, drawn in their own looks.
+        # The Hertz panels: each mesh's profile and the errors, drawn in their table looks.
         profile, errors = figure.axes[3:5]
         drawn = {line.get_label(): line for line in profile.lines + errors.lines}
-        for name, (colour, marker) in simulations.HERTZ_LOOKS.items():
-            if name in drawn:
-                assert (drawn[name].get_color(), drawn[name].get_marker()) == (colour, marker)
+        for name, line in drawn.items():
+            if name in style.JAXCONTACT:
+                assert (line.get_color(), line.get_marker()) == style.JAXCONTACT[name]
         assert errors.get_xscale() == errors.get_yscale() == "log"
         assert min(errors.get_xlim()) > 0 and profile.get_xlim()[0] == 0
         legends = [axes.get_legend() for axes in figure.axes if axes.get_legend()]
@@ -205,15 +202,6 @@ def test_the_figure_draws_from_the_record_alone(record):
                 assert not legend.get_window_extent().overlaps(axes.bbox)
     finally:
         plt.close(figure)
-
-
-def test_the_pending_looks_are_new_and_distinct():
-    # What style.py's table would take: no colour of the table, none twice.
-    looks = {**simulations.HERTZ_LOOKS, simulations.HERTZ_GUIDE: simulations.HERTZ_GUIDE_LOOKS}
-    colours = [colour for colour, _ in looks.values()]
-    assert len(set(colours)) == len(colours)
-    assert not set(colours) & {colour for colour, _ in style.STYLES.values()}
-    assert not set(looks) & set(style.STYLES)
 
 
 def test_a_record_without_the_hertz_part_draws_as_before():
