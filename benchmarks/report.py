@@ -196,7 +196,8 @@ def targets_summary(results: pathlib.Path = report.RESULTS) -> str:
         "2, at most 40 kernels, no loop whose trips grow with the scene, bytes within 4x of "
         "the least; 3, at most 1 s; 4, the times named, the answers the CPU's (here the numba "
         "grid's on the device's CPU: equal but for exact vertex ties, where its rule is the "
-        "lower index). Each row is the scene's fastest form.",
+        "lower index; 'plain query' where that record's numba grid had no pair rule yet, so its "
+        "answers on the chip were not compared). Each row is the scene's fastest form.",
         "",
     ]
     if "simulation" in recs:

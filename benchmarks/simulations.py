@@ -524,8 +524,9 @@ MERCHANT, KIENZLE, SEARCH = "Merchant", "Kienzle (Ck45)", "Search.closest (reuse
 
 def draw(record, plt):
     """The cutting and thrust forces against travel, Merchant's and Kienzle's forces beside
-    them, the steady window shaded; below, detection's share of a step in every run; then
-    (in records that have it) the Hertz part: the pressure profiles and the errors."""
+    them, the averaging window marked (steady or not, with the drift); below, detection's
+    share of a step in every run; then (in records that have it) the Hertz part: the pressure
+    profiles and the errors."""
     runs, ploughing = record["data"]["cutting"], record["data"]["ploughing"]
     indentation = record["data"].get("hertz")  # records before the Hertz part have none
     labels = [f"cutting, {run['label']}" for run in runs]
@@ -545,10 +546,15 @@ def draw(record, plt):
             every = max(1, len(travel) // 12)
             axes.plot(travel, run["trace"][key], label=run["series"], markevery=every, **looks)
         base = runs[0]
-        # The steady window: a rule where it starts (a fill would compete with Kienzle's band).
+        # The averaging window: a rule where it starts (a fill would compete with Kienzle's
+        # band), saying whether the forces are steady over it (cutting.steady_window).
         axes.axvline(base["window_from_mm"], color="#999999", linewidth=0.9, linestyle=(0, (4, 3)))
+        drift = base.get(
+            f"{'cutting' if key == 'cutting_N_per_mm' else 'thrust'}_force_drift_percent"
+        )
+        steady = base.get("forces_steady", True)
         axes.annotate(
-            "steady window →",
+            "mean: steady state →" if steady else f"mean: drifts {drift:+.0f} % →",
             (base["window_from_mm"], 0.0),
             xycoords=("data", "axes fraction"),
             xytext=(3, 4),
