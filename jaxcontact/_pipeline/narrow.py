@@ -2,8 +2,9 @@
 
 Shared by every detector: ``search_all`` (each row against every segment:
 ``all_to_all``, ``swept``, and the bucket sort's kept slaves when there are
-few segments) and ``search_listed`` (each kept slave against its cell's
-segments). Both return segment indices only; the query's ``assemble``
+few segments) and ``search_listed`` or ``search_tiles`` (each kept slave
+against its cell's segments: in chunks on the CPU, in tiles elsewhere;
+``tiled``). All return segment indices only; the query's ``assemble``
 (``_query``) turns them into results.
 """
 
@@ -178,13 +179,13 @@ def search_tiles(kernel, rows, segments: Segments, listed: CellLists, sizes: Siz
     its cell, at most ``sizes.cell_capacity``; the choice, its score, and
     whether the tiles overflowed (``tiles``).
 
-    One pass over ``(tiles, cell_capacity, TILE)`` pairs: each tile's
-    segments are gathered once for its ``TILE`` slaves, and the scores are
-    reduced along the segments, which XLA's CPU code vectorises across the
-    tile's slaves. Each list holds its segments in increasing order, so the
-    first lowest slot (``argmin``) is the lower segment, as every search
-    breaks ties. ``kernel(*row, row_tags, segment)`` scores a pair
-    (``pairs.ruled``); ``rows`` are the kept slaves' f[S, ...] arrays.
+    One pass over ``(tiles, cell_capacity, TILE)`` pairs, with no loop: each
+    tile's segments are gathered once for its ``TILE`` slaves, and the
+    scores are reduced along the segments in the same fused pass. Each list
+    holds its segments in increasing order, so the first lowest slot
+    (``argmin``) is the lower segment, as every search breaks ties.
+    ``kernel(*row, row_tags, segment)`` scores a pair (``pairs.ruled``);
+    ``rows`` are the kept slaves' f[S, ...] arrays.
     """
     num_rows, capacity = listed.first.shape[0], sizes.cell_capacity
     dtype = segments.start.dtype
@@ -251,12 +252,14 @@ def tiled() -> bool:
     (``search_listed``).
 
     Both give the same answers. On the CPU the chunks are faster: XLA's CPU
-    code scores a pair in 4.6-7 ns however the pairs are laid out (measured
-    with the repository's benchmarks/targets.py), so the work a search does
-    decides its time, and the chunks run each list only as far as it is
-    long, where a tile runs the capacity. On an accelerator the chunks' loop
-    of dependent steps, each a few kernels, is what costs, and the tiles'
-    one wide pass is what it is built for.
+    code scores a pair in some 5-15 ns however the pairs are laid out, so the
+    pairs a search scores decide its time, and the chunks run each list only
+    as far as it is long, where a tile runs the cell capacity for all its
+    slots (4-10 times the pairs on the dense reference scenes; measured with
+    the repository's benchmarks/targets.py, its stage table). On a GPU the
+    chunks' loop of dependent steps, each a few kernels, is what costs, and
+    the tiles' one wide pass measured 1.1-34 times faster on an H100 (the
+    larger the scene, the more).
     """
     return jax.default_backend() != "cpu" if TILED is None else TILED
 
