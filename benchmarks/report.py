@@ -107,12 +107,6 @@ def results_md(results: pathlib.Path = report.RESULTS, page: pathlib.Path = RESU
 
 
 # Issue 42's targets, as the summary block reads them off the records.
-SEARCH_FORMS = (
-    "Search.closest (whole search)",
-    "Search.closest (compact, whole search)",
-    "Search.closest (reused state)",
-    "Search.closest (compact, reused state)",
-)
 GPU_TARGET_MS = {
     "rough die, 1,000,000 nodes x 100,000": 2.0,
     "cutting, tool in, 1,000,000 nodes": 0.3,
@@ -123,93 +117,83 @@ TARGET_RECORDS = {
     "gpu": "gpu/targets.json",
     "simulation": "simulations.json",
 }
+TARGET_COLUMNS = (
+    "scene",
+    "1: numba / this",
+    "1: pinned",
+    "2: kernels",
+    "2: largest loop",
+    "2: bytes / least",
+    "3: compile s",
+    "3: pinned",
+    "4: GPU ms",
+    "4: GPU against the CPU",
+)
+TARGET_NOTE = (
+    "Targets: 1, at least 1 (the numba grid's time over the fastest `Search.closest` form's); "
+    "2, at most 40 kernels, no loop whose trips grow with the scene, bytes within 4x of the "
+    "least; 3, at most 1 s; 4, the times named, the answers the CPU's (here the numba grid's "
+    "on the device's CPU: equal but for exact vertex ties, where its rule is the lower index; "
+    "'plain query' where that record's numba grid had no pair rule yet, so its answers on the "
+    "chip were not compared). Each row is the scene's fastest form."
+)
 
 
-def _fastest(rec: dict) -> dict:
-    """``{scene: the row of its fastest Search form}`` of a targets record."""
+def _by_scene(rec: dict | None, methods) -> dict:
+    """``{scene: the row of its fastest method among methods}`` of a targets record."""
     best = {}
-    for row in rec["data"]["rows"]:
-        if row["method"] in SEARCH_FORMS:
+    for row in rec["data"]["rows"] if rec else ():
+        if row["method"] in methods:
             if row["scene"] not in best or row["median_ms"] < best[row["scene"]]["median_ms"]:
                 best[row["scene"]] = row
     return best
 
 
-def _cell(value, form=".2f") -> str:
-    return "–" if value is None else f"{value:{form}}" if isinstance(value, float) else str(value)
+def _fixed(value, form: str) -> str:
+    """A summary cell to a fixed format (ratios side by side read alike); else ``report.cell``."""
+    return f"{value:{form}}" if isinstance(value, float) else report.cell(value)
 
 
 def targets_summary(results: pathlib.Path = report.RESULTS) -> str:
     """Issue 42's five targets scene by scene, read off the stored records (the performance
     page's ``<!-- report: targets-summary -->`` block), with each record's command."""
-    found = {k: results / v for k, v in TARGET_RECORDS.items() if (results / v).exists()}
-    recs = {k: report.load(v) for k, v in found.items()}
-    cpu, pinned = _fastest(recs["cpu"]), _fastest(recs.get("pinned", {"data": {"rows": []}}))
-    gpu = _fastest(recs["gpu"]) if "gpu" in recs else {}
-    columns = [
-        "scene",
-        "1: numba / this",
-        "1: pinned",
-        "2: kernels",
-        "2: largest loop",
-        "2: bytes / least",
-        "3: compile s",
-        "3: pinned",
-        "4: GPU ms",
-        "4: GPU against the CPU",
-    ]
+    from benchmarks.targets import NUMBA, SEARCHES
+
+    recs = {
+        k: report.load(results / v) for k, v in TARGET_RECORDS.items() if (results / v).exists()
+    }
+    cpu, pinned = _by_scene(recs["cpu"], SEARCHES), _by_scene(recs.get("pinned"), SEARCHES)
+    gpu, peer = _by_scene(recs.get("gpu"), SEARCHES), _by_scene(recs.get("gpu"), (NUMBA,))
     rows = []
     for scene, row in cpu.items():
-        other = pinned.get(scene, {})
-        on_gpu = gpu.get(scene, {})
+        other, on_gpu = pinned.get(scene, {}), gpu.get(scene)
         limit = GPU_TARGET_MS.get(scene)
         ratio = row["bytes_accessed"] / row["minimum_bytes"] if row["bytes_accessed"] else None
-        gpu_ms = _cell(on_gpu.get("median_ms"), ".3g") + (f" (target {limit:g})" if limit else "")
-        numba_check = next(
-            (
-                r["check"]
-                for r in recs.get("gpu", {"data": {"rows": []}})["data"]["rows"]
-                if r["scene"] == scene and r["method"] == "numba grid (1 thread)"
-            ),
-            "–",
-        )
+        gpu_ms = "–"
+        if on_gpu:
+            gpu_ms = f"{on_gpu['median_ms']:.3g}" + (f" (target {limit:g})" if limit else "")
         rows.append(
             [
                 scene,
-                _cell(row["numba_over_this"]),
-                _cell(other.get("numba_over_this")),
-                _cell(row["kernels"]),
-                _cell(row["loop_trips"]),
-                _cell(ratio, ".1f"),
-                _cell(row["compile_s"], ".1f"),
-                _cell(other.get("compile_s"), ".1f"),
-                gpu_ms if on_gpu else "–",
-                numba_check,
+                _fixed(row["numba_over_this"], ".2f"),
+                _fixed(other.get("numba_over_this"), ".2f"),
+                row["kernels"],
+                row["loop_trips"],
+                _fixed(ratio, ".1f"),
+                _fixed(row["compile_s"], ".1f"),
+                _fixed(other.get("compile_s"), ".1f"),
+                gpu_ms,
+                peer.get(scene, {}).get("check"),
             ]
         )
-    lines = [
-        "| " + " | ".join(columns) + " |",
-        "|" + "---|" * len(columns),
-        *("| " + " | ".join(r) + " |" for r in rows),
-        "",
-        "Targets: 1, at least 1 (the numba grid's time over the fastest `Search.closest` form's); "
-        "2, at most 40 kernels, no loop whose trips grow with the scene, bytes within 4x of "
-        "the least; 3, at most 1 s; 4, the times named, the answers the CPU's (here the numba "
-        "grid's on the device's CPU: equal but for exact vertex ties, where its rule is the "
-        "lower index; 'plain query' where that record's numba grid had no pair rule yet, so its "
-        "answers on the chip were not compared). Each row is the scene's fastest form.",
-        "",
-    ]
+    lines = [report.markdown_table(report.table(TARGET_COLUMNS, rows, note=TARGET_NOTE)), ""]
     if "simulation" in recs:
-        share = next(
-            (r for r in recs["simulation"]["tables"][0]["rows"] if "detection" in str(r[0])), None
-        )
-        if share:
-            lines += [
-                f"Target 5, contact detection's share of a cutting step (at most 5 %): "
-                f"{_cell(share[1], '.3g')} % (`{recs['simulation']['command']}`).",
-                "",
-            ]
+        default = recs["simulation"]["data"]["cutting"][0]
+        lines += [
+            f"Target 5, contact detection's share of a cutting step (at most 5 %): "
+            f"{default['detection_percent']:.3g} % (`{recs['simulation']['command']}`).",
+            "",
+        ]
     for key, rec in recs.items():
         if key != "simulation":
             where = {"cpu": "both cores", "pinned": "pinned", "gpu": rec["device"]}[key]

@@ -77,17 +77,25 @@ def _demo(args: argparse.Namespace) -> int:
             f"(p10 {timing.p10_s * 1e3:.3f}, p90 {timing.p90_s * 1e3:.3f})"
         )
 
-    try:
-        import matplotlib
-    except ImportError:
-        print('PNG skipped: matplotlib is not installed (pip install "jaxcontact[bench]").')
+    if not _headless():
         return 0
-    matplotlib.use("Agg")  # headless: no display needed
     os.makedirs(args.out, exist_ok=True)
     path = os.path.join(args.out, f"paper_scene_n{args.n}.png")
     _draw(scene, contact, crossing, path)
     print(f"wrote {path}")
     return 0
+
+
+def _headless() -> bool:
+    """Whether a scene's PNG can be drawn: matplotlib, set to draw with no display; else
+    says why it is skipped."""
+    try:
+        import matplotlib
+    except ImportError:
+        print('PNG skipped: matplotlib is not installed (pip install "jaxcontact[bench]").')
+        return False
+    matplotlib.use("Agg")  # headless: no display needed
+    return True
 
 
 def _draw(scene, contact, crossing, path: str) -> None:
@@ -197,12 +205,8 @@ def _hertz_demo(args: argparse.Namespace) -> int:
         f"  Newton: {result.newton_steps} steps, force residual {result.residual:.2g} N/mm; "
         f"{first_s:.1f} s with compilation, {solve_s:.2f} s compiled"
     )
-    try:
-        import matplotlib
-    except ImportError:
-        print('PNG skipped: matplotlib is not installed (pip install "jaxcontact[bench]").')
+    if not _headless():
         return 0
-    matplotlib.use("Agg")
     os.makedirs(args.out, exist_ok=True)
     path = os.path.join(args.out, f"hertz_pressure_{result.across}.png")
     _draw_hertz(result, path)

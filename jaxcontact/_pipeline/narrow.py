@@ -191,14 +191,12 @@ def search_tiles(kernel, rows, segments: Segments, listed: CellLists, sizes: Siz
     dtype = segments.start.dtype
     num_tiles = sizes.tile_capacity or num_rows
     tiled = tile(listed, capacity, num_tiles)
-    slot = jnp.arange(capacity, dtype=jnp.int32)
     # i32[K, C]: each tile's segments, -1 past its list.
-    entry = jnp.minimum(tiled.first[:, None] + slot[None, :], max(listed.order.shape[0] - 1, 0))
-    listed_ok = slot[None, :] < tiled.count[:, None]
-    segment = jnp.where(listed_ok, listed.order[entry], -1) if listed.order.shape[0] else entry
+    lists = CellLists(tiled.first, tiled.count, listed.order)
+    segment = segments_in_slots(lists, jnp.arange(capacity, dtype=jnp.int32))
     index = jnp.maximum(segment, 0)
     # Reused lists may name a segment masked or degenerate since.
-    listed_ok = listed_ok & segments.ok[index]
+    listed_ok = (segment >= 0) & segments.ok[index]
     edges = (edge(segments.start[index], segments.end[index]), pick(segments.tags, index))
     at = jnp.minimum(tiled.rows, num_rows - 1)
     tile_rows = jax.tree.map(lambda values: values[at], rows)

@@ -29,9 +29,9 @@ from jaxcontact._pipeline.broad import (
     enclosing,
     segment_boxes,
 )
-from jaxcontact._pipeline.cells import Grid, bin_segments, cell_of, flat_cell
+from jaxcontact._pipeline.cells import Grid, bin_segments, cell_lists, cell_of, flat_cell
 from jaxcontact._pipeline.placement import searched_whole
-from jaxcontact._pipeline.tiles import TILE
+from jaxcontact._pipeline.tiles import tile
 from jaxcontact._types import CELLS_ABOVE, CHUNK_ROWS, Array, Sizes, Surface
 
 
@@ -141,13 +141,11 @@ def _cells_for(extent, edge: float, num_kept: int, slack: float, chosen: bool):
 
 @functools.partial(jax.jit, static_argnames=("shape", "span", "buckets"))
 def _cell_load(boxes: Box, ok: Array, grid: Grid, points: Array, shape, span, buckets):
-    """``(i32[] most segments in one cell's list, i32[] tiles the points need)``."""
+    """``(i32[] most segments in one cell's list, i32[] tiles the points need)``: the
+    tiles as the tiled cell search groups them (``tiles.tile``)."""
     bins = bin_segments(boxes, ok, grid, shape, span, ok.shape[0], buckets)
-    lists = flat_cell(cell_of(points, grid, shape), shape, buckets)
-    lists = jnp.where(bins.count[lists] > 0, lists, bins.count.shape[0] - 1)
-    per_list = jax.ops.segment_sum(jnp.ones_like(lists), lists, bins.count.shape[0])
-    tiles = jnp.sum((per_list[:-1] + TILE - 1) // TILE)
-    return jnp.max(bins.count, initial=0), tiles
+    listed = cell_lists(flat_cell(cell_of(points, grid, shape), shape, buckets), bins)
+    return jnp.max(bins.count, initial=0), tile(listed, ok.shape[0], 1).needed
 
 
 def measure(

@@ -25,9 +25,9 @@ from jaxcontact._pipeline.cells import CellLists
 from jaxcontact._pipeline.sort import stable_order
 from jaxcontact._types import Array
 
-# Slaves per tile: a tile's scores are f[cell_capacity, TILE], and TILE
-# float32 scores are one AVX2 register, along which XLA's CPU code vectorises
-# the reduction over segments.
+# Slaves per tile: each gathered segment serves eight slaves, while a list
+# with fewer slaves (the chip's outline has one or two per cell) leaves at
+# most seven slots of its tile empty.
 TILE = 8
 
 
