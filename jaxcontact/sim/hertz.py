@@ -582,7 +582,8 @@ def solve(
       problem: R (mm), P (N/mm), E (MPa), ν.
       across: elements across Hertz's contact width 2a (the mesh; h = 2a / across).
       solver: the penalty and the solver's tolerances.
-      width, depth: the block's size in units of Hertz's a.
+      width: the block's width in units of Hertz's a.
+      depth: the block's depth in units of Hertz's a.
 
     Returns:
       A ``Result``: the nodal pressures, the FE a and p0 and their errors against Hertz.
