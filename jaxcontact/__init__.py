@@ -21,4 +21,4 @@ from jaxcontact._types import Surface as Surface
 from jaxcontact._validate import validate as validate
 from jaxcontact.forces import contact_forces as contact_forces
 
-__version__ = "1.1.0"
+__version__ = "1.2.0"

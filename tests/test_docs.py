@@ -29,7 +29,7 @@ SMALLER = {
         ("curling_chip(10_000)", "curling_chip(2_000)"),
     ],
     "docs/simulation.md": [
-        ("ploughing(10_000, travel=0.5)", "ploughing(300, travel=0.1)"),
+        ("setup(10_000, travel=0.5)", "setup(300, travel=0.1)"),
         (
             "print(jax.grad(force, argnums=(0, 1))(math.radians(5.0), 0.3))",
             "value = force(math.radians(5.0), 0.3)",
@@ -58,6 +58,11 @@ CHECKS = {
         and bool(abs(ns["nodal"]).sum() > 0)
     ),
     "docs/guides/bodies.md": lambda ns: int(ns["entries"].active.sum()) > 0,
+    # The parts' worked example: the wedge pressed in, its mean pressure near Prandtl's
+    # limit (above it by the hardening, below the hardened limit at eps_p = 1).
+    "docs/parts.md": lambda ns: (
+        not bool(ns["state"].overflow) and 1.0 < ns["pressure"] / ns["prandtl"] < 1.5
+    ),
     "docs/guides/friction.md": lambda ns: (
         ns["on_slaves"].shape == ns["xs"].shape
         and bool(abs(ns["on_slaves"]).sum() > 0)

@@ -10,10 +10,16 @@ mm of width in N/mm).
 
 The model, and why:
 
-* **Material** (``sim.plasticity``): J2 flow with the Johnson–Cook flow
-  stress of Jaspers and Dautzenberg (2002) for AISI 1045, adiabatic heating
-  with a Taylor–Quinney coefficient of 0.9. No heat conduction, no damage.
-* **Elements** (``sim.solid``): updated-Lagrangian bilinear quadrilaterals,
+Built from the parts of ``jaxcontact.sim``: ``materials``, ``elements.q4``,
+``explicit``, ``coupling`` and ``tools``; what is cutting's own is the
+mesh with its parting line, node separation, the two tool outlines and the
+report.
+
+* **Material** (``Cutting.material``, ``materials.AISI_1045`` by default):
+  J2 flow with the Johnson–Cook flow stress of Jaspers and Dautzenberg
+  (2002), adiabatic heating with a Taylor–Quinney coefficient of 0.9. No
+  heat conduction, no damage.
+* **Elements** (``elements.q4``): updated-Lagrangian bilinear quadrilaterals,
   2x2 Gauss points, the B-bar mean dilatation against volumetric locking in
   isochoric plastic flow, the Hughes–Winget rotation of the stress for
   objectivity. Square elements of edge ``element`` (the uncut layer is
@@ -22,8 +28,8 @@ The model, and why:
   cut (Strenkowski and Carroll, 1985, *J. Eng. Ind.* 107, 349-354; Shih,
   Chandrasekar and Yang, 1990, the critical-distance form): the mesh is two
   blocks, the uncut layer above the parting line and the base below, whose
-  nodes on the line are duplicated and tied in pairs (``explicit.step``'s
-  ``partner``: a pair moves as one node). A pair is released for good when
+  nodes on the line are duplicated and tied in pairs (``explicit.Boundary``'s
+  ``ties``: a pair moves as one node). A pair is released for good when
   the edge's front comes within ``separation`` (default a quarter element) of
   where the pair started (the material ahead is pushed along with the tool,
   so its current place would stay ahead). Each release lets go at once of
@@ -113,10 +119,11 @@ import numpy as np
 from jax import Array
 
 import jaxcontact
-from jaxcontact.forces import Friction, coulomb, penalty
-from jaxcontact.sim import explicit, machining, plasticity, solid
+from jaxcontact.forces import Friction
+from jaxcontact.sim import coupling, explicit, machining, materials, tools
+from jaxcontact.sim._moved import forward as _forward
+from jaxcontact.sim.elements import q4
 
-STEEL = plasticity.JohnsonCook()
 CLEARANCE_DEG = 7.0
 MU = 0.3  # Coulomb's coefficient on the tool by default
 # Bulk viscosity (linear, quadratic): LS-DYNA's default linear coefficient;
@@ -129,6 +136,7 @@ PENMAX = 0.25  # own contacts deeper than this many elements are not contacts
 # is the chip's root on the machined surface at the crack tip).
 LANDING = 2.0
 ARC_SEGMENTS = 8
+FLANK = 0.3  # the flank's length (mm)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -152,7 +160,8 @@ class Cutting:
         edge node).
       ramp: share of the travel over which the tool's speed ramps up.
       erode: the Jacobian ratio below which an element is eroded.
-      shear_factor: the friction cap, in units of the steel's shear flow stress ``A / sqrt 3``.
+      shear_factor: Zorev's sticking limit, in units of the material's initial
+        shear flow stress ``A / sqrt 3`` (``coupling.Zorev``).
       rake_face: the rake face's length (mm): a chip longer than it climbs
         over the tool's top.
       breaker: ``(land, angle, length)``: a chip breaker's backwall, the
@@ -162,6 +171,9 @@ class Cutting:
       ahead: the uncut length left ahead of the tool at the end (mm;
         default three uncut thicknesses): room for a curled chip to land.
       dtype: the float dtype of the run.
+      material: the workpiece (``materials.JohnsonCook``; AISI 1045 after
+        Jaspers and Dautzenberg, 2002, by default). Its ``mass_scale`` is
+        replaced by ``mass_scaling``.
     """
 
     speed: float = 100.0
@@ -181,6 +193,7 @@ class Cutting:
     breaker: tuple[float, float, float] | None = None
     ahead: float | None = None
     dtype: str = "float32"
+    material: materials.JohnsonCook = materials.AISI_1045
 
     def __post_init__(self):
         if not self.rake_face > 0:
@@ -229,14 +242,15 @@ class Cutting:
         return self.speed * 1000.0 / 60.0
 
     @property
-    def material(self) -> plasticity.JohnsonCook:
-        """AISI 1045 with its density scaled by ``mass_scaling`` for inertia
-        only: the specific heat is divided by it, so that the heat capacity per
-        volume, ``rho c``, and with it the adiabatic heating, are the steel's."""
-        return STEEL._replace(
-            density=STEEL.density * self.mass_scaling,
-            specific_heat=STEEL.specific_heat / self.mass_scaling,
-        )
+    def scaled(self) -> materials.JohnsonCook:
+        """The material with its inertia scaled by ``mass_scaling``
+        (``materials``: heating keeps the true density)."""
+        return self.material._replace(mass_scale=self.mass_scaling)
+
+    @property
+    def tool(self) -> tools.Tool:
+        """The tool's static geometry."""
+        return cutting_tool(self.edge_radius, self.rake_face, self.breaker)
 
     @property
     def columns(self) -> int:
@@ -255,9 +269,7 @@ class Cutting:
     @property
     def dt(self) -> float:
         """The time step (s): ``safety`` times the smallest element's stable step."""
-        m = self.material
-        wave = math.sqrt((m.bulk_modulus + 4 * m.shear_modulus / 3) / m.density)
-        return self.safety * self.element / wave
+        return self.safety * self.element / materials.wave_speed(self.scaled)
 
     @property
     def steps(self) -> int:
@@ -292,7 +304,7 @@ class Cutting:
 class Workpiece(NamedTuple):
     """The workpiece's mesh with everything a cutting run needs of it (static shapes)."""
 
-    quads: solid.Quads
+    quads: q4.Quads
     partner: Array  # i32[N]  the tied node of each parting-line node (itself elsewhere)
     base_line: Array  # i32[L]  base nodes on the parting line, left to right
     chip_line: Array  # i32[L]  uncut-layer nodes on the parting line, left to right
@@ -310,8 +322,9 @@ def workpiece(cut: Cutting) -> Workpiece:
     nx, rows_b, rows_c = cut.columns, cut.base_rows, cut.chip_rows
     e, dtype = cut.element, jnp.dtype(cut.dtype)
     width = nx * e
-    base = solid.grid_mesh(width, rows_b * e, nx, rows_b, cut.material.density, dtype)
-    layer = solid.grid_mesh(width, rows_c * e, nx, rows_c, cut.material.density, dtype)
+    density = materials.inertial_density(cut.scaled)
+    base = q4.grid_mesh(width, rows_b * e, nx, rows_b, density, dtype)
+    layer = q4.grid_mesh(width, rows_c * e, nx, rows_c, density, dtype)
     nb = (nx + 1) * (rows_b + 1)
     nodes = np.concatenate(
         [np.asarray(base.nodes), np.asarray(layer.nodes) + np.array([0.0, rows_b * e])]
@@ -364,7 +377,7 @@ def workpiece(cut: Cutting) -> Workpiece:
     fixed[nodes[:, 1] == 0] = True
     fixed[nodes[:, 0] == 0, 0] = True
     return Workpiece(
-        solid.Quads(jnp.asarray(nodes, dtype), jnp.asarray(quads), jnp.asarray(mass, dtype)),
+        q4.Quads(jnp.asarray(nodes, dtype), jnp.asarray(quads), jnp.asarray(mass, dtype)),
         jnp.asarray(partner, jnp.int32),
         jnp.asarray(base_line, jnp.int32),
         jnp.asarray(chip_line, jnp.int32),
@@ -381,43 +394,18 @@ def workpiece(cut: Cutting) -> Workpiece:
 def tool_outline(
     lowest: Array, rake, edge_radius: float, dtype, rake_face: float = 0.6, breaker=None
 ) -> Array:
-    """f[ARC_SEGMENTS + 4, 2]: the tool's outline, counter-clockwise, in ``jax.numpy``.
+    """f[TOOL_NODES, 2]: the cut's tool (``tools.outline``), its edge's lowest point at
+    ``lowest`` (f[2]), ``rake`` in radians (traced): a 7° clearance, a flank
+    0.3 mm and a rake face ``rake_face`` mm from the sharp tip, the edge drawn
+    by ``ARC_SEGMENTS`` segments, an optional ``breaker``."""
+    tool = cutting_tool(edge_radius, rake_face, breaker)
+    return tools.outline(tool, rake, lowest=lowest, dtype=dtype)
 
-    ``lowest`` (f[2]) is the lowest point of the cutting edge, ``rake`` the
-    rake angle (radians, traced: the outline is differentiable in it). The
-    edge is a circular arc of ``edge_radius`` tangent to the rake face
-    (leaning back by ``rake`` from the vertical, facing -x, the cutting
-    direction) and to the flank (7° clearance). The arc runs from the rake
-    face's outward normal (angle 180° - rake) past the lowest point (270°)
-    to the flank's (277°); then the flank's end, the back corner and the
-    rake face's top. Faces ``rake_face`` mm long (rake, 0.6 by default) and 0.3 mm (flank).
-    """
-    rake = jnp.asarray(rake, dtype)
-    clearance = math.radians(CLEARANCE_DEG)
-    centre = lowest + jnp.asarray([0.0, edge_radius], dtype)
-    first = jnp.pi - rake
-    last = jnp.asarray(1.5 * math.pi + clearance, dtype)
-    angles = first + (last - first) * jnp.linspace(0.0, 1.0, ARC_SEGMENTS + 1, dtype=dtype)
-    arc = centre[None, :] + edge_radius * jnp.stack([jnp.cos(angles), jnp.sin(angles)], -1)
-    flank_end = arc[-1] + 0.3 * jnp.asarray([math.cos(clearance), math.sin(clearance)], dtype)
-    up = jnp.stack([jnp.sin(rake), jnp.cos(rake)])  # along the rake face, away from the edge
-    if breaker is not None:
-        # A chip breaker's backwall: the land, then a wall turned towards the
-        # chip (-x); the outline goes from the flank's end straight to the
-        # wall's end (the same node count: the back corner is left out).
-        land, angle, length = breaker
-        land_end = arc[0] + land * up
-        turn = math.radians(angle)
-        wall = jnp.stack(
-            [
-                up[0] * math.cos(turn) - up[1] * math.sin(turn),
-                up[0] * math.sin(turn) + up[1] * math.cos(turn),
-            ]
-        )
-        return jnp.concatenate([arc, jnp.stack([flank_end, land_end + length * wall, land_end])])
-    rake_end = arc[0] + rake_face * up
-    back = jnp.stack([flank_end[0], rake_end[1]])
-    return jnp.concatenate([arc, jnp.stack([flank_end, back, rake_end])])
+
+def cutting_tool(edge_radius: float, rake_face: float = 0.6, breaker=None) -> tools.Tool:
+    """The cut's ``tools.Tool``: a 7° clearance, a flank of 0.3 mm, the edge drawn by
+    ``ARC_SEGMENTS`` segments."""
+    return tools.Tool(edge_radius, CLEARANCE_DEG, rake_face, FLANK, ARC_SEGMENTS, breaker)
 
 
 TOOL_NODES = ARC_SEGMENTS + 4
@@ -508,14 +496,10 @@ def tool_surface(cut: Cutting, centre_x, rake) -> jaxcontact.Surface:
     for side in (BASE_SIDE, CHIP_SIDE):
         lowest_y = cut.parting_y + (side - 1) * cut.edge_radius
         lowest = jnp.stack([jnp.asarray(centre_x, dtype), jnp.asarray(lowest_y, dtype)])
-        outlines.append(
-            tool_outline(lowest, rake, cut.edge_radius, dtype, cut.rake_face, cut.breaker)
-        )
-    starts = np.arange(TOOL_NODES)
-    ring = np.stack([starts, (starts + 1) % TOOL_NODES], -1).astype(np.int32)
+        outlines.append(tools.outline(cut.tool, rake, lowest=lowest, dtype=dtype))
     return jaxcontact.Surface(
         jnp.concatenate(outlines),
-        jnp.asarray(np.concatenate([ring, ring + TOOL_NODES])),
+        jnp.asarray(tools.rings(TOOL_NODES, 2)),
         body=jnp.asarray(np.repeat(np.arange(2, dtype=np.int32), TOOL_NODES)),
     )
 
@@ -560,7 +544,7 @@ def setup(cut: Cutting) -> tuple[Model, State]:
         pool=mesh.pair[:, 0] >= 0,
         pairs=jaxcontact.Pairs(slave_node=mesh.slaves, self_contact=True),
     )
-    body = explicit.at_rest(mesh.quads, cut.material)
+    body = explicit.at_rest(mesh.quads, cut.scaled)
     friction = Friction.zeros(x.shape[0], x.dtype)
     alive = jnp.ones(mesh.quads.quads.shape[0], bool)
     start = State(body, tool, own, friction, released, alive, jnp.zeros((), jnp.int32))
@@ -587,6 +571,13 @@ def _contacts(model: Model, tool_state, own_state, x, lowest_x, rake, released, 
     return tool, on_tool, tool_state, slip, own, on_own, own_state
 
 
+def friction_law(cut: Cutting, mu) -> coupling.Zorev:
+    """The tool's friction: Coulomb's ``mu``, up to Zorev's sticking limit of
+    ``shear_factor`` times the material's initial shear flow stress, each
+    node's share of the face an element's length."""
+    return coupling.Zorev(mu, cut.shear_factor * cut.material.shear_yield, cut.element)
+
+
 def step(model: Model, state: State, rake, mu) -> tuple[State, Record]:
     """One explicit step of the cut (``rake`` in radians, ``mu`` the friction coefficient)."""
     cut, mesh = model.cut, model.mesh
@@ -599,69 +590,48 @@ def step(model: Model, state: State, rake, mu) -> tuple[State, Record]:
     # with the tool, so its current place would keep ahead of the edge.
     ahead = lowest_x - cut.edge_radius - mesh.quads.nodes[mesh.base_line, 0]
     released = state.released | (ahead < cut.critical_distance)
-    # Penalty stiffness from each node's mass and the step (LS-DYNA's "soft
-    # constraint" form): k = stiffness * m / dt^2 keeps the contact spring
-    # stable in the explicit step whatever the node's mass, and is about E
-    # per mm (independent of the mass scaling: m / dt^2 scales out).
-    k = cut.stiffness * mesh.quads.mass / cut.dt**2
+    # The penalty as stiff as each node's mass allows in the step: about E
+    # per mm, independent of the mass scaling (``coupling.mass_penalty``).
+    k = coupling.mass_penalty(mesh.quads.mass, cut.dt, cut.stiffness)
     kept = held(mesh, state.alive)
     tool, on_tool, tool_state, slip, own, on_own, own_state = _contacts(
         model, state.tool, state.own, x, lowest_x, rake, released, state.alive, kept
     )
-    # The tool: penalty and Coulomb friction from the slip history.
-    # Sticking and sliding (Zorev, 1963; the friction factor of Shirakashi and
-    # Usui, 1973): the friction stress is mu times the pressure, and never
-    # more than ``shear_factor`` times the steel's shear flow stress A / sqrt 3
-    # over the node's share of the face (an element): a cap on mu per node.
-    pressed = jnp.where(on_tool.active, k * -on_tool.gap, 0)
-    cap = cut.shear_factor * STEEL.A / math.sqrt(3) * cut.element
-    mu = jnp.where(pressed * mu > cap, cap / jnp.where(pressed > 0, pressed, 1), mu)
-    tool_forces, friction = coulomb(
-        on_tool, slip, state.friction, tool, stiffness=k, tangent_stiffness=k, mu=mu
+    # The tool: penalty, and Zorev's sticking and sliding from the slip
+    # history, each node's share of the face an element.
+    tool_forces, friction = coupling.friction_forces(
+        on_tool, slip, state.friction, tool, k, friction_law(cut, mu)
     )
     # The workpiece against its own outline (the chip on the machined surface
-    # and on itself): frictionless penalty, the reaction on the outline's nodes.
-    # A node beyond the open end of the outline (the crack tip: the chip's
-    # underside and the machined surface end there) is not pressed on it:
-    # its closest point is that end, and the side it lies on is rounding.
-    ends = (
-        jnp.zeros(x.shape[0], jnp.int32).at[mesh.segments].add(own.mask[:, None].astype(jnp.int32))
-    )
-    open_end = (on_own.vertex >= 0) & (ends[jnp.maximum(on_own.vertex, 0)] == 1)
-    # Nor is a node found deeper than PENMAX elements "inside" its own
-    # workpiece (LS-DYNA's PENMAX): near the crack tip the outline is open, and
-    # a node of the base under the chip's root lies on the inner side of the
-    # chip's underside without being in the chip. Those are counted.
-    deep = on_own.active & (-on_own.gap > PENMAX * cut.element)
-    on_own = on_own._replace(active=on_own.active & ~open_end & ~deep)
-    own_forces = penalty(on_own, own, k[mesh.slaves])
+    # and on itself): frictionless penalty on both sides. Near the crack tip
+    # the outline is open: a node past its end, or a node of the base under
+    # the chip's root found more than PENMAX elements "inside" the chip's
+    # underside, is not in contact (``coupling.guard``); the deep ones are counted.
+    guarded = coupling.guard(on_own, own, PENMAX * cut.element)
+    on_own = guarded.contact
     # The chip landed (on the workpiece ahead of the tool, or on itself): an
     # own contact away from the edge, where the crack's faces meet.
     edge = jnp.stack([lowest_x, jnp.asarray(cut.parting_y, dtype)])
     away = jnp.sum((x[mesh.slaves] - edge[None, :]) ** 2, -1) > (LANDING * cut.uncut) ** 2
     landed = jax.lax.stop_gradient(on_own.active & away).sum()
-    external = (
-        tool_forces.on_slaves
-        + jnp.zeros_like(x).at[mesh.slaves].add(own_forces.on_slaves)
-        + own_forces.on_master
-    )
+    external = tool_forces.on_slaves + coupling.own_forces(on_own, own, mesh.slaves, k[mesh.slaves])
     tied = ~released
-    partner = mesh.partner.at[mesh.base_line].set(jnp.where(tied, mesh.chip_line, mesh.base_line))
-    partner = partner.at[mesh.chip_line].set(jnp.where(tied, mesh.base_line, mesh.chip_line))
+    ties = mesh.partner.at[mesh.base_line].set(jnp.where(tied, mesh.chip_line, mesh.base_line))
+    ties = ties.at[mesh.chip_line].set(jnp.where(tied, mesh.base_line, mesh.chip_line))
     body, _ = explicit.step(
-        cut.material,
+        cut.scaled,
         mesh.quads,
         state.body,
         external,
         jnp.asarray(cut.dt, dtype),
-        fixed=mesh.fixed | ~kept[:, None],  # debris stops where it is
-        partner=partner,
+        # Debris (the nodes of eroded elements only) stops where it is.
+        explicit.Boundary(fixed=mesh.fixed | ~kept[:, None], ties=ties),
         alive=state.alive,
         viscosity=VISCOSITY,
     )
     # Erosion: an element squeezed at a Gauss point to ``erode`` of its area
     # is folding (it would turn inside out next): it is taken out, and counted.
-    alive = state.alive & (solid.distortion(mesh.quads, body.x) > cut.erode)
+    alive = state.alive & (q4.distortion(mesh.quads, body.x) > cut.erode)
     record = Record(
         force=tool_forces.on_master.sum(0),
         tool_depth=jnp.max(jnp.where(on_tool.active, -on_tool.gap, 0)),
@@ -670,7 +640,7 @@ def step(model: Model, state: State, rake, mu) -> tuple[State, Record]:
         own_contacts=on_own.active.sum(),
         released=released.sum(),
         eroded=(~alive).sum(),
-        dropped=deep.sum(),
+        dropped=guarded.deep.sum(),
         landed=landed,
         overflow=tool_state.overflow | own_state.overflow,
     )
@@ -967,6 +937,13 @@ def _steady_elements(model: Model, state: State) -> np.ndarray:
     return layer & window & np.asarray(state.alive)
 
 
+def _material_name(material: materials.JohnsonCook) -> str:
+    if material == materials.AISI_1045:
+        return "AISI 1045 (Johnson-Cook, Jaspers and Dautzenberg 2002)"
+    fit = ", ".join(f"{name}={getattr(material, name):g}" for name in "ABnCm")
+    return f"Johnson-Cook ({fit})"
+
+
 def summary(model: Model, state: State, record: Record, frames, seconds: float, rake_deg, mu):
     """What the run measured, and the analyses set beside it (plain numbers;
     docs/simulation.md's "The demo's summary.json" lists every key).
@@ -1007,7 +984,7 @@ def summary(model: Model, state: State, record: Record, frames, seconds: float, 
     flowing = rates[(layer > cut.parting_y) & last.alive & (rates > 0)]
     rate = float(np.percentile(flowing, 90)) if flowing.size else 1.0
     eps, hot = float(np.median(strain)), float(np.median(temperature))
-    flow = float(plasticity.flow_stress(STEEL, eps, rate, hot))
+    flow = float(cut.material.flow_stress(eps, rate, hot))
     tau = flow / math.sqrt(3)
     merchant_fc, merchant_ft = machining.merchant_forces(tau, cut.uncut, 1.0, rake_deg, beta)
     depth = max(
@@ -1019,7 +996,7 @@ def summary(model: Model, state: State, record: Record, frames, seconds: float, 
     landed = np.flatnonzero(np.asarray(record.landed) > 0)
     lands_at = travel_at(model, int(landed[0])) if landed.size else None
     return {
-        "material": "AISI 1045 (Johnson-Cook, Jaspers and Dautzenberg 2002)",
+        "material": _material_name(cut.material),
         "cutting_speed_m_per_min": cut.speed,
         "uncut_chip_thickness_mm": cut.uncut,
         "rake_deg": float(rake_deg),
@@ -1109,3 +1086,6 @@ def detection_share(
         jax.block_until_ready(_detect_jit(model, state, rake, steps))
         ratios.append((time.perf_counter() - started) / whole)
     return float(np.median(ratios))
+
+
+__getattr__ = _forward(__name__, {"STEEL": "jaxcontact.sim.materials.AISI_1045"})

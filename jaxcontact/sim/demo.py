@@ -22,8 +22,8 @@ import numpy as np
 
 from jaxcontact import all_to_all
 from jaxcontact._timing import Timing, pinned_note
-from jaxcontact.sim.elastic import stresses, von_mises
-from jaxcontact.sim.ploughing import History, ploughing, run, simulate, tool_surface
+from jaxcontact.sim.elements.triangle import stresses, von_mises
+from jaxcontact.sim.ploughing import History, run, setup, simulate, tool_surface
 
 
 class Summary(NamedTuple):
@@ -85,7 +85,7 @@ def run_demo(
     What to draw: ``(mesh, controls, config, final, history, with_detection,
     without)``, the last two the ``Timing`` s of the whole scan.
     """
-    mesh, controls, config = ploughing(nodes, travel=travel, dtype=dtype, slaves=slaves)
+    mesh, controls, config = setup(nodes, travel=travel, dtype=dtype, slaves=slaves)
     start = time.perf_counter()
     final, history, config = simulate(mesh, controls, config)
     first_s = time.perf_counter() - start  # compilation and one run

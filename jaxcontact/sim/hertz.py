@@ -86,7 +86,8 @@ import numpy as np
 from jax import Array
 
 from jaxcontact import Surface, all_to_all
-from jaxcontact.sim.elastic import Material, Mesh, strain_energy, triangle_mesh
+from jaxcontact.sim.elements.triangle import Mesh, strain_energy, triangle_mesh
+from jaxcontact.sim.materials import Elastic
 
 # The uniform zone of the mesh, about the contact: |x| <= FINE a, y >= -FINE a.
 FINE = 1.5
@@ -254,7 +255,7 @@ def block(
     rows = np.arange(ny)[:, None] * nx + np.arange(nx)[None, :]
     boundary = np.concatenate([rows[1:, 0], rows[-1, 1:], rows[-2:0:-1, -1]])
     free = nodes[:, 1] > -depth * a * (1 - 1e-12)
-    mesh = triangle_mesh(nodes, triangles, free, boundary, Material(), dtype=dtype)
+    mesh = triangle_mesh(nodes, triangles, free, boundary, Elastic(), dtype=dtype)
     top = rows[-1]
     edges = np.diff(xs)
     tributary = (np.concatenate([[0.0], edges]) + np.concatenate([edges, [0.0]])) / 2
@@ -340,8 +341,8 @@ def _unpack(block: Block, z: Array) -> tuple[Array, Array]:
     return u, z[-1]
 
 
-def _moduli(problem: Indentation) -> tuple[Material, Array]:
-    material = Material(young=problem.young, poisson=problem.poisson)
+def _moduli(problem: Indentation) -> tuple[Elastic, Array]:
+    material = Elastic(young=problem.young, poisson=problem.poisson)
     return material, problem.young / (1 - problem.poisson**2)
 
 

@@ -40,6 +40,8 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+import sys
+import types
 from typing import NamedTuple
 
 import jax
@@ -49,13 +51,74 @@ from jax import Array
 
 from jaxcontact import Search, Sizes, Surface
 from jaxcontact.forces import penalty
-from jaxcontact.sim.elastic import Material, Mesh, internal_forces, smallest_altitude
-from jaxcontact.sim.elastic import workpiece_mesh as workpiece_mesh
-from jaxcontact.sim.tool import tool_outline as tool_outline
-from jaxcontact.sim.tool import tool_surface as tool_surface
+from jaxcontact.scenes import grid
+from jaxcontact.sim import tools
+from jaxcontact.sim._moved import deprecated as _deprecated
+from jaxcontact.sim.elements.triangle import Mesh, internal_forces, smallest_altitude, triangle_mesh
+from jaxcontact.sim.materials import STEEL, Elastic, inertial_density
 
 # Steel with its density scaled by 10^4: the default workpiece (see the module docstring).
-MASS_SCALED_STEEL = Material(mass_scale=1e4)
+MASS_SCALED_STEEL = STEEL._replace(mass_scale=1e4)
+
+# The cutting scene's tool (docs/scenes.md): a 7° clearance, faces 3 mm from
+# the tip, an edge of radius 0.05 drawn by 16 segments, the tip at height 4
+# (a depth of cut of 1 in a workpiece 5 high).
+SCENE_TOOL = tools.Tool(edge_radius=0.05, rake_face=3.0, flank=3.0, arc_segments=16)
+TIP_HEIGHT = 4.0
+
+
+@jax.jit
+def tool_outline(x_tip, rake) -> Array:
+    """f[20, 2]: the cutting scene's tool outline, its tip at ``(x_tip, 4)``, in jnp.
+
+    ``tools.outline`` of ``SCENE_TOOL``: the geometry of
+    ``scenes.cutting_tool_outline`` (which it equals at ``rake = 10°``),
+    differentiable in ``x_tip`` and ``rake`` (radians).
+
+    Example:
+      >>> import math
+      >>> from jaxcontact.scenes import cutting_tool_outline
+      >>> outline = tool_outline(18.0, math.radians(10))
+      >>> bool(abs(outline - cutting_tool_outline(18.0)).max() < 1e-5)
+      True
+    """
+    dtype = jnp.result_type(rake, float)
+    tip = jnp.stack([jnp.asarray(x_tip, dtype), jnp.asarray(TIP_HEIGHT, dtype)])
+    return tools.outline(SCENE_TOOL, rake, tip=tip, dtype=dtype)
+
+
+def tool_surface(x_tip, rake) -> Surface:
+    """The closed ``Surface`` of ``tool_outline(x_tip, rake)``."""
+    return Surface(tool_outline(x_tip, rake), jnp.asarray(tools.rings(SCENE_TOOL.nodes)))
+
+
+def workpiece_mesh(num_nodes: int, material: Elastic, *, dtype=jnp.float32) -> Mesh:
+    """The cutting scene's workpiece grid split into linear triangles.
+
+    The grid is ``scenes.cutting_scene``'s (``[0, 20] x [0, 5]``, ``nx / ny ~ 4``,
+    numbered row by row), so the slaves of a simulation are that scene's
+    slaves. Each grid cell becomes two counter-clockwise triangles; each
+    triangle gives a third of its mass to each of its nodes. Nodes on
+    ``y = 0`` are fixed; ``boundary`` lists the others on the outline, in
+    order along it, so that consecutive rows are close in space (as
+    ``bucket_sort``'s culling in blocks of rows wants).
+
+    Example:
+      >>> mesh = workpiece_mesh(2_000, STEEL)
+      >>> mesh.nodes.shape, mesh.triangles.shape
+      ((2002, 2), (3780, 3))
+    """
+    ny = max(2, round(math.sqrt(num_nodes / 4)))
+    nx = max(2, round(num_nodes / ny))
+    nodes = grid((0.0, 20.0), (0.0, 5.0), nx, ny)
+    corner = (np.arange(ny - 1)[:, None] * nx + np.arange(nx - 1)[None, :]).ravel()
+    lower = np.stack([corner, corner + 1, corner + nx + 1], axis=-1)
+    upper = np.stack([corner, corner + nx + 1, corner + nx], axis=-1)
+    triangles = np.concatenate([lower, upper]).astype(np.int32)
+
+    rows = np.arange(ny)[:, None] * nx + np.arange(nx)[None, :]
+    boundary = np.concatenate([rows[1:, 0], rows[-1, 1:], rows[-2:0:-1, -1]])
+    return triangle_mesh(nodes, triangles, nodes[:, 1] > 0, boundary, material, dtype=dtype)
 
 
 class Controls(NamedTuple):
@@ -80,7 +143,7 @@ class Ploughing:
       x_tip_start: the tool tip's x at step 0.
       radius: contact search radius (mm); it must exceed every penetration.
       damping: mass-proportional damping coefficient (1/s).
-      material: the workpiece ``Material``.
+      material: the workpiece's ``materials.Elastic``.
       search: the contact ``Search`` (its radius and skin: the search radius
         and the candidates' extra reach, mm).
       sizes: its sizes, allocated on the host for the tool anywhere along
@@ -94,7 +157,7 @@ class Ploughing:
     speed: float
     x_tip_start: float
     damping: float
-    material: Material
+    material: Elastic
     search: Search
     sizes: Sizes
     all_slaves: bool = False
@@ -121,12 +184,12 @@ class Final(NamedTuple):
     rebuilds: Array  # i32[]  how often the candidates were found again
 
 
-def ploughing(
+def setup(
     num_nodes: int = 10_000,
     *,
     travel: float = 0.4,
     speed: float = 3_000.0,
-    material: Material = MASS_SCALED_STEEL,
+    material: Elastic = MASS_SCALED_STEEL,
     stiffness_factor: float = 10.0,
     safety: float = 0.5,
     damping_ratio: float = 0.3,
@@ -162,7 +225,7 @@ def ploughing(
       ``(mesh, controls, config)`` for ``run``.
 
     Example:
-      >>> mesh, controls, config = ploughing(300, travel=0.1)
+      >>> mesh, controls, config = setup(300, travel=0.1)
       >>> mesh.nodes.shape, config.sizes.num_slaves, config.steps
       ((297, 2), 47, 24)
     """
@@ -181,7 +244,7 @@ def ploughing(
     omega = math.sqrt(elastic**2 + stiffness / lightest)
     dt = safety * 2 / omega
     _, mu = material.lame
-    shear_speed = math.sqrt(mu / (material.density * material.mass_scale))
+    shear_speed = math.sqrt(mu / inertial_density(material))
     damping = 2 * damping_ratio * math.pi * shear_speed / (2 * float(np.ptp(nodes[:, 1])))
     radius, x_tip_start = spacing, 20.02
     steps = max(1, math.ceil(travel / (speed * dt)))
@@ -292,7 +355,7 @@ def mean_cutting_force(mesh: Mesh, controls: Controls, config: Ploughing) -> Arr
     tests/sim/test_simulate.py checks it against central differences).
 
     Example:
-      >>> mesh, controls, config = ploughing(300, travel=0.1)
+      >>> mesh, controls, config = setup(300, travel=0.1)
       >>> round(float(mean_cutting_force(mesh, controls, config)), -1)
       1720.0
     """
@@ -310,7 +373,7 @@ def simulate(
       ``(final, history, config)``, ``config`` holding the sizes that held.
 
     Example:
-      >>> mesh, controls, config = ploughing(300, travel=0.1)
+      >>> mesh, controls, config = setup(300, travel=0.1)
       >>> final, history, config = simulate(mesh, controls, config)
       >>> config.steps, int(history.active.max()), bool(history.force[:, 0].mean() > 0)
       (24, 1, True)
@@ -326,3 +389,15 @@ def simulate(
         bigger = search.allocate(x, surface, at_least=config.sizes).sizes
         config = dataclasses.replace(config, sizes=bigger)
     raise RuntimeError(f"the search sizes still overflowed after {tries} runs: {config.sizes}")
+
+
+class _Callable(types.ModuleType):
+    """This module, callable as the 0.7.5 set-up function ``jaxcontact.sim.ploughing``
+    was (the package exported the function under the module's name)."""
+
+    def __call__(self, *args, **kwargs):
+        return _ploughing(*args, **kwargs)
+
+
+_ploughing = _deprecated("jaxcontact.sim.ploughing", "jaxcontact.sim.ploughing.setup", setup)
+sys.modules[__name__].__class__ = _Callable

@@ -19,7 +19,8 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxcontact.sim import cutting, cutting_demo, explicit, solid
+from jaxcontact.sim import cutting, cutting_demo, explicit, materials
+from jaxcontact.sim.elements import q4
 from tests.tolerances import (
     FD_RUN_RTOL,
     FLOAT32_ATOL,
@@ -102,9 +103,10 @@ def test_a_chip_breaker_turns_the_rake_face_towards_the_chip():
     np.testing.assert_array_equal(broken[: cutting.ARC_SEGMENTS + 2], plain[:-2])
     # The land runs up the rake face (x of the face, land long), then the wall
     # turns `angle` towards the chip (-x) and runs `length`.
+    # Both measured from the sharp tip: the land ends 0.6 - land below the plain face's top.
     face_x = plain[0, 0]
     wall_end, land_end = broken[-2], broken[-1]
-    np.testing.assert_allclose(land_end, [face_x, plain[0, 1] + land], atol=FLOAT32_ATOL)
+    np.testing.assert_allclose(land_end, [face_x, plain[-1, 1] - (0.6 - land)], atol=FLOAT32_ATOL)
     wall = wall_end - land_end
     np.testing.assert_allclose(np.linalg.norm(wall), length, rtol=FLOAT32_RTOL)
     np.testing.assert_allclose(
@@ -169,8 +171,8 @@ def test_the_summary_has_the_keys_a_machinist_reads(coarse_run):
 
 
 def test_tied_nodes_move_as_one_and_eroded_elements_carry_nothing():
-    steel = cutting.STEEL
-    quads = solid.grid_mesh(2.0, 1.0, 2, 1, steel.density, jnp.float32)
+    steel = materials.AISI_1045
+    quads = q4.grid_mesh(2.0, 1.0, 2, 1, steel.density, jnp.float32)
     body = explicit.at_rest(quads, steel)
     pushed = np.zeros((6, 2), np.float32)
     pushed[0, 0], pushed[5, 1] = 5.0, -3.0  # different forces on nodes 0 and 5
@@ -179,7 +181,7 @@ def test_tied_nodes_move_as_one_and_eroded_elements_carry_nothing():
     dt = explicit.stable_dt(quads, steel)
     # Nodes 0 and 5 start apart here: tied, they get one acceleration.
     tied, _ = explicit.step(
-        steel, quads, body, jnp.asarray(pushed), dt, partner=jnp.asarray(partner)
+        steel, quads, body, jnp.asarray(pushed), dt, explicit.Boundary(ties=jnp.asarray(partner))
     )
     velocity = np.asarray(tied.v)
     np.testing.assert_array_equal(velocity[0], velocity[5])
@@ -189,9 +191,9 @@ def test_tied_nodes_move_as_one_and_eroded_elements_carry_nothing():
         points=body.points._replace(stress=jnp.ones_like(body.points.stress) * 100.0)
     )
     alive = jnp.asarray([False, True])
-    forces = solid.internal_forces(quads, body.x, stressed.points.stress, alive)
-    only_right = solid.internal_forces(
-        solid.Quads(quads.nodes, quads.quads[1:], quads.mass), body.x, stressed.points.stress[1:]
+    forces = q4.internal_forces(quads, body.x, stressed.points.stress, alive)
+    only_right = q4.internal_forces(
+        q4.Quads(quads.nodes, quads.quads[1:], quads.mass), body.x, stressed.points.stress[1:]
     )
     np.testing.assert_allclose(np.asarray(forces), np.asarray(only_right), atol=MASKED_ELEMENT_ATOL)
 

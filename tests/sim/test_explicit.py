@@ -1,8 +1,8 @@
 """The pieces of the cutting simulation together: an explicit plane-strain
 compression of an AISI 1045 block by a rigid platen, through jaxcontact.
 
-A 1 x 1 mm block of 4 x 4 elements (``sim.solid``), Johnson–Cook with
-adiabatic heating (``sim.plasticity``), central differences
+A 1 x 1 mm block of 4 x 4 elements (``elements.q4``), Johnson–Cook with
+adiabatic heating (``materials.AISI_1045``), central differences
 (``sim.explicit``), pressed by a rigid platen moving down at 1 m/s; the
 contact is a ``jaxcontact.Search`` with the normal penalty of
 ``jaxcontact.forces``. Frictionless, the block deforms homogeneously, and
@@ -20,18 +20,19 @@ import pytest
 
 import jaxcontact
 from jaxcontact.forces import penalty
-from jaxcontact.sim import explicit, plasticity, solid
+from jaxcontact.sim import explicit, materials
+from jaxcontact.sim.elements import q4
 from tests.tolerances import EXPLICIT_AREA_RTOL, EXPLICIT_FORCE_RTOL, EXPLICIT_HEAT_ATOL
 
 pytestmark = pytest.mark.x64
 
-STEEL = plasticity.JohnsonCook()
+STEEL = materials.AISI_1045
 SPEED = 1000.0  # mm/s
 TRAVEL = 0.12  # mm
 
 
 def compress(stiffness=5.0e4):
-    quads = solid.grid_mesh(1.0, 1.0, 4, 4, STEEL.density, jnp.float64)
+    quads = q4.grid_mesh(1.0, 1.0, 4, 4, STEEL.density, jnp.float64)
     dt = explicit.stable_dt(quads, STEEL)
     steps = int(TRAVEL / SPEED / dt)
     bottom = np.asarray(quads.nodes[:, 1]) == 0
@@ -54,7 +55,9 @@ def compress(stiffness=5.0e4):
         surface = platen(height)
         contact, _ = search.closest(search.init(body.x, surface, sizes=None), body.x, surface)
         on_slaves = penalty(contact, surface, stiffness).on_slaves
-        body, _ = explicit.step(STEEL, quads, body, on_slaves, dt, jnp.asarray(fixed))
+        body, _ = explicit.step(
+            STEEL, quads, body, on_slaves, dt, explicit.Boundary(fixed=jnp.asarray(fixed))
+        )
         top = jnp.mean(jnp.where(jnp.asarray(bottom)[:, None], 0.0, body.x)[20:, 1])
         return (body, height), (-on_slaves[:, 1].sum(), top, body.points.temperature.mean())
 

@@ -15,7 +15,8 @@ import pytest
 
 from jaxcontact import _cli
 from jaxcontact.sim import hertz
-from jaxcontact.sim.elastic import Material, internal_forces, strain_energy
+from jaxcontact.sim.elements.triangle import internal_forces, strain_energy
+from jaxcontact.sim.materials import Elastic
 from tests.tolerances import (
     CLOSED_FORM_RTOL,
     FLOAT64_RTOL,
@@ -91,7 +92,7 @@ def test_the_block_is_graded_towards_the_contact():
 
 def test_strain_energy_is_the_internal_forces_potential():
     block = hertz.block(hertz.Indentation(), 4)
-    material = Material(young=70_000.0, poisson=0.33)
+    material = Elastic(young=70_000.0, poisson=0.33)
     u = 1e-3 * jax.random.normal(jax.random.key(0), block.mesh.nodes.shape, jnp.float64)
     forces = -jax.grad(strain_energy, argnums=1)(block.mesh, u, material)
     np.testing.assert_allclose(forces, internal_forces(block.mesh, u, material), atol=1e-9)

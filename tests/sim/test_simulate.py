@@ -15,8 +15,8 @@ import pytest
 
 from jaxcontact import _cli
 from jaxcontact.scenes import cutting_tool_outline
-from jaxcontact.sim import mean_cutting_force, ploughing, run, simulate, tool_outline
 from jaxcontact.sim.demo import run_demo
+from jaxcontact.sim.ploughing import mean_cutting_force, run, setup, simulate, tool_outline
 from tests.tolerances import FLOAT64_RTOL, FLOAT64_STEPS_RTOL, RERUN_ATOL
 
 pytestmark = [pytest.mark.simulation, pytest.mark.slow, pytest.mark.x64]
@@ -30,7 +30,7 @@ GRADIENT_RTOL = 1e-6
 
 @pytest.fixture(scope="module")
 def small():
-    mesh, controls, config = ploughing(3_000, travel=0.2, dtype=jnp.float64)
+    mesh, controls, config = setup(3_000, travel=0.2, dtype=jnp.float64)
     final, history = run(mesh, controls, config)
     return mesh, controls, config, final, jax.tree.map(np.asarray, history)
 
@@ -111,7 +111,7 @@ def test_reuse_surface_slaves_and_growing_sizes_change_nothing(small):
     # after the run and ``simulate`` grows. The same forces: reusing lists,
     # taking only surface slaves and growing the sizes miss nothing here.
     mesh, controls, config, _, history = small
-    _, _, every_node = ploughing(3_000, travel=0.2, dtype=jnp.float64, slaves="all")
+    _, _, every_node = setup(3_000, travel=0.2, dtype=jnp.float64, slaves="all")
     cramped = dataclasses.replace(
         every_node,
         search=dataclasses.replace(every_node.search, method="binned"),

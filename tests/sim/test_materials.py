@@ -1,4 +1,4 @@
-"""The cutting simulation's material: J2 plasticity, Johnson–Cook AISI 1045, adiabatic heating.
+"""The materials (``sim.materials``): J2 plasticity, Johnson–Cook AISI 1045, adiabatic heating.
 
 Checked against the formulas themselves (written out here in NumPy) along
 monotonic plane-strain paths: consistency (the stress stays on the yield
@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from jax.test_util import check_grads
 
-from jaxcontact.sim.plasticity import JohnsonCook, PointState, flow_stress, update, von_mises
+from jaxcontact.sim.materials import AISI_1045, PointState, von_mises
 from tests.tolerances import (
     FD_MATERIAL_STEP,
     FD_RTOL,
@@ -27,8 +27,16 @@ from tests.tolerances import (
 
 pytestmark = pytest.mark.x64
 
-STEEL = JohnsonCook()
+STEEL = AISI_1045
 DT = 1e-6  # s
+
+
+def flow_stress(material, plastic_strain, rate, temperature):
+    return material.flow_stress(plastic_strain, rate, temperature)
+
+
+def update(material, state, strain_increment, dt):
+    return material.update(state, strain_increment, dt)
 
 
 def johnson_cook(eps, rate, temperature, m=STEEL):

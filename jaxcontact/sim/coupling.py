@@ -1,0 +1,128 @@
+"""The contact coupling of an explicit run: what a ``jaxcontact.Search`` found, as nodal forces.
+
+Three choices every explicit contact code makes, each an option here:
+
+* **The penalty's stiffness.** ``mass_penalty``: ``k_i = factor m_i / dt²``,
+  the form of LS-DYNA's soft constraint (Hallquist, *LS-DYNA Theory
+  Manual*, 2006, section 23.8.1): a node's contact spring is as stiff as its
+  mass allows in the explicit step, so it stays stable whatever the node's
+  mass and whatever the mass scaling (``m / dt²`` scales out). Stable for a
+  factor below about 1.
+* **The friction law** (``Coulomb`` or ``Zorev``), turned into a
+  coefficient per node and handed to ``jaxcontact.forces.coulomb`` with the
+  slip history.
+* **The penetration guards** of a body against its own outline
+  (``guard``): a contact at an open end of the outline (a crack tip: the
+  node's closest point is that end, and which side it lies on is
+  rounding), and a contact deeper than ``depth`` (LS-DYNA's PENMAX: a node
+  found that deep "inside" is on the inner side of a face it never went
+  through), are left out and counted.
+
+Units: forces in N per mm of thickness, lengths in mm, stresses in MPa.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import jax.numpy as jnp
+from jax import Array
+
+from jaxcontact import Contact, Slip, Surface
+from jaxcontact.forces import Forces, Friction, coulomb, penalty
+
+
+def mass_penalty(mass: Array, dt, factor: float) -> Array:
+    """f[N]: each node's penalty stiffness ``factor m_i / dt²`` (N/mm per mm of thickness)."""
+    return factor * mass / dt**2
+
+
+class Coulomb(NamedTuple):
+    """Coulomb's law: the friction force is ``mu`` times the normal force."""
+
+    mu: float | Array
+
+    def coefficient(self, normal: Array) -> Array:
+        """f[N]: the coefficient each node's normal force ``normal`` (N/mm) gets."""
+        return jnp.broadcast_to(jnp.asarray(self.mu, normal.dtype), normal.shape)
+
+
+class Zorev(NamedTuple):
+    """Sticking and sliding after Zorev (1963): the friction stress is Coulomb's
+    ``mu p`` where that is below ``limit`` and ``limit`` where it is not, the
+    sticking zone near a cutting edge.
+
+    Zorev, N. N. (1963), "Inter-relationship between shear processes
+    occurring along tool face and shear plane in metal cutting", *Int.
+    Research in Production Engineering*, ASME, 42-49. The limit is the shear
+    factor times the chip's shear flow stress, ``m k`` (Shirakashi and Usui,
+    1973; the form Özel, 2006, *Int. J. Mach. Tools Manuf.* 46, 518-530,
+    compares with others).
+
+    Attributes:
+      mu: the sliding coefficient.
+      limit: the friction stress in sticking (MPa), scalar or f[N].
+      share: each node's share of the contact's length (mm), scalar or f[N]:
+        its force limit is ``limit * share`` (N/mm).
+    """
+
+    mu: float | Array
+    limit: float | Array
+    share: float | Array
+
+    def coefficient(self, normal: Array) -> Array:
+        cap = jnp.asarray(self.limit, normal.dtype) * jnp.asarray(self.share, normal.dtype)
+        mu = jnp.asarray(self.mu, normal.dtype)
+        sticking = normal * mu > cap
+        return jnp.where(sticking, cap / jnp.where(normal > 0, normal, 1), mu)
+
+
+def friction_forces(
+    contact: Contact,
+    slip: Slip,
+    friction: Friction,
+    surface: Surface,
+    stiffness: Array,
+    law: Coulomb | Zorev,
+) -> tuple[Forces, Friction]:
+    """The penalty and the friction of ``law`` on a tracked contact: ``forces.coulomb``
+    with the law's coefficient per node, the stick spring as stiff as the normal one."""
+    normal = jnp.where(contact.active, stiffness * -contact.gap, 0)
+    mu = law.coefficient(normal)
+    return coulomb(
+        contact, slip, friction, surface, stiffness=stiffness, tangent_stiffness=stiffness, mu=mu
+    )
+
+
+class Guarded(NamedTuple):
+    """A contact with the guards applied, and what they left out."""
+
+    contact: Contact  # its ``active`` without the open ends and the deep contacts
+    open_end: Array  # bool[N]  closest to an open end of the outline
+    deep: Array  # bool[N]  deeper than the depth limit
+
+
+def guard(contact: Contact, surface: Surface, depth: float | None = None) -> Guarded:
+    """Leaves out a body's contacts on its own outline that are not contacts.
+
+    ``depth`` (mm; None: no limit) is the deepest a real contact can be.
+    An open end is a vertex of one real segment of ``surface``.
+    """
+    nodes = surface.nodes.shape[0]
+    mask = jnp.ones(surface.segments.shape[0], bool) if surface.mask is None else surface.mask
+    ends = jnp.zeros(nodes, jnp.int32).at[surface.segments].add(mask[:, None].astype(jnp.int32))
+    open_end = (contact.vertex >= 0) & (ends[jnp.maximum(contact.vertex, 0)] == 1)
+    if depth is None:
+        deep = jnp.zeros_like(contact.active)
+    else:
+        deep = contact.active & (-contact.gap > depth)
+    active = contact.active & ~open_end & ~deep
+    return Guarded(contact._replace(active=active), open_end, deep)
+
+
+def own_forces(contact: Contact, surface: Surface, slaves: Array, stiffness: Array) -> Array:
+    """f[N, 2]: the frictionless penalty (``forces.penalty``) of a body on its own
+    outline, both sides summed onto its N nodes: the outline's nodes are the
+    body's, and the contact's rows are the nodes ``slaves`` (i32[S])."""
+    forces = penalty(contact, surface, stiffness)
+    return forces.on_master.at[slaves].add(forces.on_slaves)
