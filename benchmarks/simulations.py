@@ -4,10 +4,12 @@ a cylinder pressed into an elastic block against Hertz.
 Three parts, the first two float32, each run as ``jaxcontact demo`` runs it:
 
 1. **Orthogonal cutting** (``jaxcontact.sim.cutting``: AISI 1045, 100 m/min, h = 0.10 mm,
-   rake 0°, mu = 0.3 capped at half the shear flow stress, 4 elements through h, 0.6 mm of
-   travel, mass scaled 400x), then the same cut at half the mass scaling (200x: the stable
-   step shorter by sqrt 2, the steps more by as much); with ``--fine`` a third at half the
-   element size (slow). Reported: the steady cutting and thrust forces (means over the last
+   rake 0°, mu = 0.3 up to Zorev's limit of half the shear flow stress, 4 elements through h,
+   0.8 mm of travel, mass scaled 400x), then the same cut at half the mass scaling (200x: the
+   stable step shorter by sqrt 2, the steps more by as much) and at half the element size
+   (the mesh refined: 8 elements through h, about 8x the work). Then **other conditions**,
+   one run each, the default mesh: 200 m/min, h = 0.05 and 0.15 mm, rake +10° and -10°.
+   Reported: the steady cutting and thrust forces (means over the last
    40 % of the steps, N per mm of width), the chip's thickness ratio and shear angle (from
    the chip's geometry), the friction angle (from the forces), beside
 
@@ -51,11 +53,9 @@ The figure: the cutting and thrust forces against the tool's travel with Merchan
 Kienzle's predictions, detection's share of a step in every run; the FE contact pressure of
 each mesh over Hertz's, and the errors against the element size.
 
-    python benchmarks/simulations.py                  # about 10 min on 2 cores
-    taskset -c 0 python benchmarks/simulations.py --out benchmarks/results/pinned
-    python benchmarks/simulations.py --quick          # a coarse cut, 2,000 nodes ploughing,
-                                                      # Hertz at 12 and 24 elements
-    python benchmarks/simulations.py --fine           # and a cut at half the element size
+    python benchmarks/simulations.py                  # about 20 min on 2 cores
+    python benchmarks/simulations.py --quick          # a coarse cut, no others, 2,000 nodes
+                                                      # ploughing, Hertz at 12 and 24 elements
 """
 
 from __future__ import annotations
@@ -80,7 +80,14 @@ COARSE = {"element": 0.05, "uncut": 0.10, "depth": 0.1, "travel": 0.25}  # --qui
 PLOUGHING = {"full": ((10_000, 63_001), 0.5), "quick": ((2_000,), 0.1)}  # (nodes, travel mm)
 HERTZ = {"full": hertz.MESHES, "quick": hertz.MESHES[:2]}  # elements across 2a
 HERTZ_STEP = 1e-5  # the central difference's step, relative to the parameter
-OPTIONS = ((("--fine",), {"action": "store_true", "help": "also cut at half the element size"}),)
+# The other conditions: (label, what differs from the default cut, the rake angle in degrees).
+CONDITIONS = (
+    ("200 m/min", {"speed": 200.0}, 0.0),
+    ("h = 0.05 mm", {"uncut": 0.05}, 0.0),
+    ("h = 0.15 mm", {"uncut": 0.15}, 0.0),
+    ("rake +10°", {}, 10.0),
+    ("rake -10°", {}, -10.0),
+)
 # The quantities of the cutting table: (row, summary key, decimals; None: as it is).
 QUANTITIES = (
     ("cutting force F_c (N/mm)", "cutting_force_N_per_mm", 1),
@@ -115,9 +122,9 @@ QUANTITIES = (
 # -- orthogonal cutting --------------------------------------------------------------
 
 
-def cuts(quick: bool, fine: bool):
+def cuts(quick: bool):
     """``(Cutting, label, series)`` of each run: the default cut (``--quick``: a coarse one),
-    the same at half the mass scaling, and with ``fine`` at half the element size."""
+    the same at half the mass scaling, and (not ``quick``) at half the element size."""
     base = cutting.Cutting(**COARSE) if quick else cutting.Cutting()
     kind = "coarse" if quick else "default"
     mass = base.mass_scaling
@@ -129,7 +136,7 @@ def cuts(quick: bool, fine: bool):
             f"simulation, {mass / 2:.0f}x mass",
         ),
     ]
-    if fine:
+    if not quick:
         half = dataclasses.replace(base, element=base.element / 2)
         plan.append((half, "half the element", "simulation, half the element"))
     return plan
@@ -148,12 +155,14 @@ def trace(travel, force, points: int = POINTS) -> dict:
     }
 
 
-def summarise(model, state, record, frames, seconds, label: str, series: str) -> dict:
+def summarise(
+    model, state, record, frames, seconds, label: str, series: str, rake: float = 0.0
+) -> dict:
     """A cutting run's summary (``cutting.summary``) with what the record adds: its label
     and series, the element, the own contacts left out, the force trace and where the
     forces' averaging window begins (``cutting.steady_window``: the steady state where the
     run reaches one, else the last 40 % of the steps)."""
-    summary = cutting.summary(model, state, record, frames, seconds, 0.0, cutting.MU)
+    summary = cutting.summary(model, state, record, frames, seconds, rake, cutting.MU)
     steps = len(record.force)
     at = np.arange(1, steps + 1)
     travel = cutting.tool_travel(model.cut, at)
@@ -168,12 +177,14 @@ def summarise(model, state, record, frames, seconds, label: str, series: str) ->
     return summary
 
 
-def measure_cut(cut, label: str, series: str) -> dict:
+def measure_cut(cut, label: str, series: str, rake: float = 0.0, share: bool = True) -> dict:
+    """One cut at ``rake`` (degrees) summarised, with detection's share of a step (``share``)."""
     started = time.perf_counter()
-    model, state, record, frames, seconds = cutting.run(cut, 0.0, cutting.MU)
-    summary = summarise(model, state, record, frames, seconds, label, series)
-    summary["detection_share"] = cutting.detection_share(model, state, 0.0, cutting.MU)
-    summary["detection_percent"] = 100 * summary["detection_share"]
+    model, state, record, frames, seconds = cutting.run(cut, rake, cutting.MU)
+    summary = summarise(model, state, record, frames, seconds, label, series, rake)
+    if share:
+        summary["detection_share"] = cutting.detection_share(model, state, rake, cutting.MU)
+        summary["detection_percent"] = 100 * summary["detection_share"]
     summary["wall_s"] = time.perf_counter() - started
     print(
         f"{label}: F_c {summary['cutting_force_N_per_mm']:.1f} N/mm, "
@@ -213,6 +224,45 @@ def cutting_table(runs) -> dict:
         "A published experiment is not compared here (the module's docstring says why)."
     )
     return report.table(columns, cells, title="Orthogonal cutting, AISI 1045", note=note)
+
+
+# The conditions table: (column, summary key, decimals).
+CONDITION_COLUMNS = (
+    ("F_c (N/mm)", "cutting_force_N_per_mm", 1),
+    ("F_t (N/mm)", "thrust_force_N_per_mm", 1),
+    ("chip ratio", "chip_thickness_ratio", 2),
+    ("shear angle (°)", "shear_angle_deg", 1),
+    ("steady", "forces_steady", None),
+    ("F_c drift (%)", "cutting_force_drift_percent", 1),
+    ("F_t drift (%)", "thrust_force_drift_percent", 1),
+    ("eroded elements", "eroded_elements", None),
+    ("Merchant F_c (N/mm)", "merchant_cutting_force_N_per_mm", 1),
+    ("Merchant F_t (N/mm)", "merchant_thrust_force_N_per_mm", 1),
+    ("Kienzle F_c (N/mm)", "kienzle_cutting_force_N_per_mm", 1),
+)
+
+
+def conditions_table(runs) -> dict:
+    """A row per cutting condition: the default cut, then each of ``CONDITIONS``."""
+    labels = ["default: 100 m/min, h = 0.10 mm, rake 0°", *(label for label, _, _ in CONDITIONS)]
+    cells = [
+        [label, *(rounded(run[key], decimals) for _, key, decimals in CONDITION_COLUMNS)]
+        for label, run in zip(labels, runs, strict=False)
+    ]
+    note = (
+        "One run each on the default mesh (25 µm elements), 0.8 mm of travel, mu = 0.3 up to "
+        "Zorev's limit of half of A/sqrt 3. Means as in the table above. Merchant's forces "
+        "are for each run's own friction angle and shear flow stress; Kienzle's for Ck45 with "
+        "k_c1.1 = 2220 N/mm², m_c = 0.14, whatever the speed and rake (its fit has neither). "
+        "An eroded element is one the run took out as folded (`Cutting.erode`): a run with "
+        "eroded elements tore its mesh, and its forces are not the cut's."
+    )
+    return report.table(
+        ["condition", *(name for name, _, _ in CONDITION_COLUMNS)],
+        cells,
+        title="Orthogonal cutting at other conditions",
+        note=note,
+    )
 
 
 def cutting_notes(runs) -> list[str]:
@@ -496,7 +546,13 @@ def draw_hertz(rows, profile, errors, used) -> None:
 
 def run(args) -> dict:
     started = time.perf_counter()
-    runs = [measure_cut(*plan) for plan in cuts(args.quick, args.fine)]
+    runs = [measure_cut(*plan) for plan in cuts(args.quick)]
+    others = [
+        measure_cut(
+            dataclasses.replace(cutting.Cutting(), **change), label, "condition", rake, False
+        )
+        for label, change, rake in ([] if args.quick else CONDITIONS)
+    ]
     sizes, travel = PLOUGHING["quick" if args.quick else "full"]
     repeats = args.repeats or 5
     ploughing = [
@@ -512,10 +568,11 @@ def run(args) -> dict:
     ]
     tables = [
         cutting_table(runs),
+        *([conditions_table([runs[0], *others])] if others else []),
         ploughing_table(ploughing, travel, repeats),
         hertz_table(indentation),
     ]
-    data = {"cutting": runs, "ploughing": ploughing, "hertz": indentation}
+    data = {"cutting": runs, "conditions": others, "ploughing": ploughing, "hertz": indentation}
     return {"title": TITLE, "tables": tables, "data": data, "notes": notes}
 
 
@@ -601,4 +658,4 @@ def draw(record, plt):
 
 
 if __name__ == "__main__":
-    sys.exit(_run.suite("simulations", run, draw, __doc__.splitlines()[0], options=OPTIONS))
+    sys.exit(_run.suite("simulations", run, draw, __doc__.splitlines()[0]))

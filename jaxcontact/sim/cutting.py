@@ -178,7 +178,7 @@ class Cutting:
 
     speed: float = 100.0
     uncut: float = 0.10
-    travel: float = 0.6
+    travel: float = 0.8
     element: float = 0.025
     depth: float = 0.2
     edge_radius: float = 0.002
@@ -189,7 +189,7 @@ class Cutting:
     ramp: float = 0.05
     erode: float = 0.1
     shear_factor: float = 0.5
-    rake_face: float = 0.6
+    rake_face: float = 1.0
     breaker: tuple[float, float, float] | None = None
     ahead: float | None = None
     dtype: str = "float32"

@@ -127,6 +127,12 @@ def add_arguments(parser, shared: bool = True) -> None:
         help=f"Coulomb friction on the tool, 0 or more (default {cutting.MU:g})",
     )
     parser.add_argument(
+        "--edge-radius",
+        type=positive,
+        default=_DEFAULT.edge_radius,
+        help=f"the cutting edge's radius in mm (default {_DEFAULT.edge_radius:g})",
+    )
+    parser.add_argument(
         "--element",
         type=positive,
         default=None,
@@ -205,6 +211,7 @@ def make_cut(args: argparse.Namespace) -> cutting.Cutting:
         uncut=args.uncut,
         travel=travel,
         element=element_size(args),
+        edge_radius=args.edge_radius,
         mass_scaling=args.mass_scaling,
         breaker=CURL["breaker"] if curl else None,
         ahead=CURL["ahead"] if curl else None,

@@ -61,7 +61,7 @@ def test_defaults_are_the_cutting_scene():
     assert cutting_demo.check(args) is None
     cut = cutting_demo.make_cut(args)
     assert cut == cutting.Cutting(
-        speed=100.0, uncut=0.10, travel=0.6, element=0.025, mass_scaling=400.0, dtype="float32"
+        speed=100.0, uncut=0.10, travel=0.8, element=0.025, mass_scaling=400.0, dtype="float32"
     )
     assert (args.rake, args.mu, args.frames) == (0.0, cutting.MU, 40)
     assert not (args.fine or args.no_pictures or args.no_gif)
@@ -71,9 +71,11 @@ def test_options_make_the_cut():
     args = _demo_args(
         "--speed", "200", "--uncut", "0.05", "--rake", "-30", "--mu", "0", "--element", "0.025",
         "--fine", "--travel", "0.3", "--mass-scaling", "100", "--dtype", "float64",
+        "--edge-radius", "0.03",
     )  # fmt: skip
     cut = cutting_demo.make_cut(args)
     assert (cut.speed, cut.uncut, cut.travel, cut.mass_scaling) == (200.0, 0.05, 0.3, 100.0)
+    assert cut.edge_radius == 0.03
     assert cut.element == 0.0125 and cut.dtype == "float64"
     assert (args.rake, args.mu) == (-30.0, 0.0)
 
@@ -97,7 +99,7 @@ def test_standalone_parser_takes_the_shared_options():
     cutting_demo.add_arguments(parser)
     args = parser.parse_args(["--out", "there", "--no-gif"])
     assert (args.travel, args.out, args.dtype, args.no_gif) == (None, "there", "float32", True)
-    assert cutting_demo.make_cut(args).travel == 0.6
+    assert cutting_demo.make_cut(args).travel == cutting.Cutting().travel
 
 
 def test_other_scenes_keep_their_options():
