@@ -47,7 +47,7 @@ report.
   the uncut layer's nodes meet the tool with its edge's centre a radius below
   the line (the rake face reaches down to it), and the base's nodes meet it
   with its lowest point on the line (``CHIP_SIDE``, ``BASE_SIDE``: two
-  outlines, 2 edge radii = 4 µm apart, told apart by ``Search``'s bodies).
+  outlines, 2 edge radii apart, told apart by ``Search``'s bodies).
 * **Contact**: two searches a step, because a node at the edge touches the
   tool and the workpiece at once, and a closest-point search gives each
   slave one segment. ``Search(track=True, normals="smooth")`` finds every
@@ -181,7 +181,7 @@ class Cutting:
     travel: float = 0.8
     element: float = 0.025
     depth: float = 0.2
-    edge_radius: float = 0.002
+    edge_radius: float = 0.02
     mass_scaling: float = 400.0
     safety: float = 0.3
     separation: float | None = None

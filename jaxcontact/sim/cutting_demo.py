@@ -46,7 +46,13 @@ _STRAIN_MAX = 3.0  # the plastic strain colour scale's top
 # The chip-breaker cut of ``--curl`` (the smallest breaker found, in a study of
 # several, on which the chip curls and lands cleanly): a backwall (land, angle°, length, mm),
 # 2 elements through h, the travel, and the uncut length left ahead (mm).
-CURL = {"breaker": (0.25, 30.0, 0.5), "element": 0.05, "travel": 3.2, "ahead": 1.5}
+CURL = {
+    "breaker": (0.25, 30.0, 0.5),
+    "element": 0.05,
+    "travel": 3.2,
+    "ahead": 1.5,
+    "edge_radius": 0.002,
+}
 FRAMES = 40  # the run in this many calls, a frame after each: the GIF's frames
 _BAR = 30  # characters of the progress bar
 _EDGES = (0.15, 0.15, 0.15, 0.5)  # the elements' edges: dark grey, half transparent
@@ -129,8 +135,9 @@ def add_arguments(parser, shared: bool = True) -> None:
     parser.add_argument(
         "--edge-radius",
         type=positive,
-        default=_DEFAULT.edge_radius,
-        help=f"the cutting edge's radius in mm (default {_DEFAULT.edge_radius:g})",
+        default=None,
+        help=f"the cutting edge's radius in mm (default {_DEFAULT.edge_radius:g}; "
+        f"{CURL['edge_radius']:g} with --curl)",
     )
     parser.add_argument(
         "--element",
@@ -206,12 +213,15 @@ def make_cut(args: argparse.Namespace) -> cutting.Cutting:
     travel = getattr(args, "travel", None)
     if travel is None:
         travel = CURL["travel"] if curl else TRAVEL
+    edge_radius = args.edge_radius
+    if edge_radius is None:
+        edge_radius = CURL["edge_radius"] if curl else _DEFAULT.edge_radius
     return cutting.Cutting(
         speed=args.speed,
         uncut=args.uncut,
         travel=travel,
         element=element_size(args),
-        edge_radius=args.edge_radius,
+        edge_radius=edge_radius,
         mass_scaling=args.mass_scaling,
         breaker=CURL["breaker"] if curl else None,
         ahead=CURL["ahead"] if curl else None,

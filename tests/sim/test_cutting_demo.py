@@ -85,6 +85,7 @@ def test_curl_is_the_chip_breaker_cut_unless_told_otherwise():
     want = cutting_demo.CURL
     assert cut.breaker == want["breaker"] and cut.ahead == want["ahead"]
     assert (cut.element, cut.travel) == (want["element"], want["travel"])
+    assert cut.edge_radius == want["edge_radius"] != cutting.Cutting().edge_radius
     # What is given is kept; the breaker and the room ahead stay.
     cut = cutting_demo.make_cut(_demo_args("--curl", "--travel", "1", "--element", "0.025"))
     assert (cut.element, cut.travel, cut.breaker) == (0.025, 1.0, want["breaker"])
