@@ -23,6 +23,7 @@ The package's 0.7.5 names (the ploughing run's) still work, with a
 """
 
 from jaxcontact.sim import coupling as coupling
+from jaxcontact.sim import cutting as cutting
 from jaxcontact.sim import elements as elements
 from jaxcontact.sim import explicit as explicit
 from jaxcontact.sim import hertz as hertz

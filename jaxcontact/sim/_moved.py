@@ -23,11 +23,14 @@ def forward(old: str, moved: dict[str, str]) -> Callable[[str], object]:
     return __getattr__
 
 
-def deprecated(old: str, target: str, function: Callable) -> Callable:
-    """``function`` under its old name ``old``, warning that ``target`` replaces it."""
+def deprecated(old: str, target: str, function: Callable, stacklevel: int = 2) -> Callable:
+    """``function`` under its old name ``old``, warning that ``target`` replaces it
+    (``stacklevel``: the frames up to the caller the warning names)."""
 
     def call(*args, **kwargs):
-        warnings.warn(f"{old} is deprecated: use {target}", DeprecationWarning, stacklevel=2)
+        warnings.warn(
+            f"{old} is deprecated: use {target}", DeprecationWarning, stacklevel=stacklevel
+        )
         return function(*args, **kwargs)
 
     call.__name__ = old.rpartition(".")[2]

@@ -120,9 +120,10 @@ def guard(contact: Contact, surface: Surface, depth: float | None = None) -> Gua
     return Guarded(contact._replace(active=active), open_end, deep)
 
 
-def own_forces(contact: Contact, surface: Surface, slaves: Array, stiffness: Array) -> Array:
-    """f[N, 2]: the frictionless penalty (``forces.penalty``) of a body on its own
-    outline, both sides summed onto its N nodes: the outline's nodes are the
-    body's, and the contact's rows are the nodes ``slaves`` (i32[S])."""
+def own_forces(contact: Contact, surface: Surface, stiffness: Array, slaves: Array) -> Array:
+    """f[N, 2]: the frictionless penalty (``forces.penalty``, ``stiffness`` scalar or
+    f[S]) of a body on its own outline, both sides summed onto its N nodes: the
+    outline's nodes are the body's, and the contact's rows are the nodes ``slaves``
+    (i32[S])."""
     forces = penalty(contact, surface, stiffness)
     return forces.on_master.at[slaves].add(forces.on_slaves)

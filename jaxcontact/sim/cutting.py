@@ -15,7 +15,7 @@ Built from the parts of ``jaxcontact.sim``: ``materials``, ``elements.q4``,
 mesh with its parting line, node separation, the two tool outlines and the
 report.
 
-* **Material** (``Cutting.material``, ``materials.AISI_1045`` by default):
+* **Material** (``Cutting.work_material``, ``materials.AISI_1045`` by default):
   J2 flow with the Johnson–Cook flow stress of Jaspers and Dautzenberg
   (2002), adiabatic heating with a Taylor–Quinney coefficient of 0.9. No
   heat conduction, no damage.
@@ -79,8 +79,8 @@ report.
 * **Time integration**: central differences (``sim.explicit``) at
   ``safety`` (0.3) times the stable step of the smallest element, linear
   bulk viscosity (0.06, LS-DYNA's default). Mass scaling: the density times
-  ``mass_scaling``, which lengthens the stable step by its square root; the
-  specific heat is divided by it, so heating is the steel's. The material's
+  ``mass_scaling``, which lengthens the stable step by its square root, for
+  inertia only (``materials``' ``mass_scale``): heating is the steel's. The material's
   rate follows the real motion; only inertia changes (measured against a run
   at half the scaling: the forces and the chip ratio within about 1 %).
 * **Erosion**: an element whose Jacobian falls below ``erode`` of its
@@ -111,6 +111,7 @@ import dataclasses
 import functools
 import math
 import time
+import warnings
 from typing import NamedTuple
 
 import jax
@@ -171,9 +172,9 @@ class Cutting:
       ahead: the uncut length left ahead of the tool at the end (mm;
         default three uncut thicknesses): room for a curled chip to land.
       dtype: the float dtype of the run.
-      material: the workpiece (``materials.JohnsonCook``; AISI 1045 after
-        Jaspers and Dautzenberg, 2002, by default). Its ``mass_scale`` is
-        replaced by ``mass_scaling``.
+      work_material: the workpiece's ``materials.JohnsonCook`` (AISI 1045
+        after Jaspers and Dautzenberg, 2002, by default). Its ``mass_scale`` is
+        replaced by ``mass_scaling`` (``scaled``).
     """
 
     speed: float = 100.0
@@ -193,9 +194,14 @@ class Cutting:
     breaker: tuple[float, float, float] | None = None
     ahead: float | None = None
     dtype: str = "float32"
-    material: materials.JohnsonCook = materials.AISI_1045
+    work_material: materials.JohnsonCook = materials.AISI_1045
 
     def __post_init__(self):
+        if not isinstance(self.work_material, materials.JohnsonCook):
+            raise ValueError(
+                "Cutting.work_material must be a materials.JohnsonCook (the friction limit "
+                f"reads its A); got {type(self.work_material).__name__}"
+            )
         if not self.rake_face > 0:
             raise ValueError(f"Cutting.rake_face must be > 0 mm; got {self.rake_face!r}")
         if self.ahead is not None and not self.ahead >= 0:
@@ -208,11 +214,16 @@ class Cutting:
                     "Cutting.breaker must be None or (land mm, angle degrees, length mm); "
                     f"got {self.breaker!r}"
                 ) from None
-            if not (land > self.edge_radius and 0 < angle < 90 and length > 0):
+            # The land is measured from the sharp tip: it must reach past the
+            # edge's tangent point on the rake face, r / tan(wedge / 2) from the
+            # tip, farthest at the sharpest wedge the demo takes (rake +30°).
+            wedge = math.radians(90.0 - 30.0 - CLEARANCE_DEG)
+            tangent = self.edge_radius / math.tan(wedge / 2)
+            if not (land > tangent and 0 < angle < 90 and length > 0):
                 raise ValueError(
-                    f"Cutting.breaker (land, angle, length) needs land > the edge radius "
-                    f"({self.edge_radius:g} mm), 0 < angle < 90 degrees and length > 0; "
-                    f"got {self.breaker!r}"
+                    f"Cutting.breaker (land, angle, length) needs land > the edge's tangent "
+                    f"point ({tangent:.3g} mm from the tip at a rake of 30°), 0 < angle < 90 "
+                    f"degrees and length > 0; got {self.breaker!r}"
                 )
             object.__setattr__(self, "breaker", (land, angle, length))
             # The outline stays one simple polygon at every rake the demo takes
@@ -243,9 +254,20 @@ class Cutting:
 
     @property
     def scaled(self) -> materials.JohnsonCook:
-        """The material with its inertia scaled by ``mass_scaling``
+        """``work_material`` with its inertia scaled by ``mass_scaling``
         (``materials``: heating keeps the true density)."""
-        return self.material._replace(mass_scale=self.mass_scaling)
+        return self.work_material._replace(mass_scale=self.mass_scaling)
+
+    @property
+    def material(self) -> materials.JohnsonCook:
+        """Deprecated: ``scaled`` (1.1's ``material`` was the mass-scaled steel)."""
+        warnings.warn(
+            "Cutting.material is deprecated: use Cutting.scaled (mass-scaled, as "
+            "Cutting.material was) or Cutting.work_material",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        return self.scaled
 
     @property
     def tool(self) -> tools.Tool:
@@ -402,7 +424,7 @@ def tool_outline(
     return tools.outline(tool, rake, lowest=lowest, dtype=dtype)
 
 
-def cutting_tool(edge_radius: float, rake_face: float = 0.6, breaker=None) -> tools.Tool:
+def cutting_tool(edge_radius: float, rake_face: float, breaker=None) -> tools.Tool:
     """The cut's ``tools.Tool``: a 7° clearance, a flank of 0.3 mm, the edge drawn by
     ``ARC_SEGMENTS`` segments."""
     return tools.Tool(edge_radius, CLEARANCE_DEG, rake_face, FLANK, ARC_SEGMENTS, breaker)
@@ -575,7 +597,7 @@ def friction_law(cut: Cutting, mu) -> coupling.Zorev:
     """The tool's friction: Coulomb's ``mu``, up to Zorev's sticking limit of
     ``shear_factor`` times the material's initial shear flow stress, each
     node's share of the face an element's length."""
-    return coupling.Zorev(mu, cut.shear_factor * cut.material.shear_yield, cut.element)
+    return coupling.Zorev(mu, cut.shear_factor * cut.work_material.shear_yield, cut.element)
 
 
 def step(model: Model, state: State, rake, mu) -> tuple[State, Record]:
@@ -614,7 +636,7 @@ def step(model: Model, state: State, rake, mu) -> tuple[State, Record]:
     edge = jnp.stack([lowest_x, jnp.asarray(cut.parting_y, dtype)])
     away = jnp.sum((x[mesh.slaves] - edge[None, :]) ** 2, -1) > (LANDING * cut.uncut) ** 2
     landed = jax.lax.stop_gradient(on_own.active & away).sum()
-    external = tool_forces.on_slaves + coupling.own_forces(on_own, own, mesh.slaves, k[mesh.slaves])
+    external = tool_forces.on_slaves + coupling.own_forces(on_own, own, k[mesh.slaves], mesh.slaves)
     tied = ~released
     ties = mesh.partner.at[mesh.base_line].set(jnp.where(tied, mesh.chip_line, mesh.base_line))
     ties = ties.at[mesh.chip_line].set(jnp.where(tied, mesh.base_line, mesh.chip_line))
@@ -984,7 +1006,7 @@ def summary(model: Model, state: State, record: Record, frames, seconds: float, 
     flowing = rates[(layer > cut.parting_y) & last.alive & (rates > 0)]
     rate = float(np.percentile(flowing, 90)) if flowing.size else 1.0
     eps, hot = float(np.median(strain)), float(np.median(temperature))
-    flow = float(cut.material.flow_stress(eps, rate, hot))
+    flow = float(cut.work_material.flow_stress(eps, rate, hot))
     tau = flow / math.sqrt(3)
     merchant_fc, merchant_ft = machining.merchant_forces(tau, cut.uncut, 1.0, rake_deg, beta)
     depth = max(
@@ -996,7 +1018,7 @@ def summary(model: Model, state: State, record: Record, frames, seconds: float, 
     landed = np.flatnonzero(np.asarray(record.landed) > 0)
     lands_at = travel_at(model, int(landed[0])) if landed.size else None
     return {
-        "material": _material_name(cut.material),
+        "material": _material_name(cut.work_material),
         "cutting_speed_m_per_min": cut.speed,
         "uncut_chip_thickness_mm": cut.uncut,
         "rake_deg": float(rake_deg),

@@ -74,7 +74,7 @@ def step(
     external: Array,
     dt,
     boundary: Boundary | None = None,
-    *,
+    *old,
     alive: Array | None = None,
     viscosity: tuple[float, float] | None = None,
     fixed: Array | None = None,
@@ -97,10 +97,25 @@ def step(
       fixed: deprecated: ``Boundary(fixed=...)``.
       velocity: deprecated: ``Boundary(velocity=...)``.
       partner: deprecated: ``Boundary(ties=...)``.
+      *old: deprecated: 1.1's positional ``fixed, velocity, partner, alive,
+        viscosity`` (a ``fixed`` array in ``boundary``'s place).
 
     Returns:
       The new ``Body`` and the step's plastic strain increments (f[E, 4]).
     """
+    if old or not (boundary is None or isinstance(boundary, Boundary)):
+        # 1.1's positional order: fixed, velocity, partner, alive, viscosity.
+        named = dict(zip(("velocity", "partner", "alive", "viscosity"), old, strict=False))
+        if len(old) > 4 or isinstance(boundary, Boundary):
+            raise TypeError(
+                "explicit.step takes (material, quads, body, external, dt, boundary) "
+                f"positionally, then keywords; got {6 + len(old)} positional arguments"
+            )
+        fixed, boundary = boundary, None
+        velocity = named.get("velocity", velocity)
+        partner = named.get("partner", partner)
+        alive = named.get("alive", alive)
+        viscosity = named.get("viscosity", viscosity)
     boundary = Boundary() if boundary is None else boundary
     if fixed is not None or velocity is not None or partner is not None:
         warnings.warn(
@@ -113,6 +128,11 @@ def step(
             boundary.fixed if fixed is None else fixed,
             boundary.velocity if velocity is None else velocity,
             boundary.ties if partner is None else partner,
+        )
+    if boundary.velocity is not None and boundary.fixed is None:
+        raise ValueError(
+            "explicit.Boundary.velocity prescribes the components fixed marks: "
+            "got a velocity with fixed=None"
         )
     pressure = None
     if viscosity is not None:

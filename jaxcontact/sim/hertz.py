@@ -86,6 +86,7 @@ import numpy as np
 from jax import Array
 
 from jaxcontact import Surface, all_to_all
+from jaxcontact.sim._moved import forward as _forward
 from jaxcontact.sim.elements.triangle import Mesh, strain_energy, triangle_mesh
 from jaxcontact.sim.materials import Elastic
 
@@ -632,3 +633,6 @@ def solve(
         residual=float(found.residual),
         newton_steps=int(found.newton_steps),
     )
+
+
+__getattr__ = _forward(__name__, {"Material": "jaxcontact.sim.materials.Elastic"})

@@ -3,6 +3,8 @@ AISI 1045's constants ``jaxcontact.sim.materials.AISI_1045``."""
 
 from __future__ import annotations
 
+import warnings
+
 from jaxcontact.sim import materials
 from jaxcontact.sim._moved import deprecated, forward
 
@@ -12,8 +14,24 @@ _FIELDS = (
 ).split()
 
 
-def _johnson_cook(*args, **fields) -> materials.JohnsonCook:
-    return materials.AISI_1045._replace(**dict(zip(_FIELDS, args, strict=False)), **fields)
+class _Either(type):
+    """``isinstance(x, plasticity.JohnsonCook)`` holds for every ``materials.JohnsonCook``."""
+
+    def __instancecheck__(cls, instance) -> bool:
+        return isinstance(instance, materials.JohnsonCook)
+
+
+class _JohnsonCook(materials.JohnsonCook, metaclass=_Either):
+    """1.1's ``JohnsonCook``: its defaults were AISI 1045's. Builds a ``materials.JohnsonCook``."""
+
+    def __new__(cls, *args, **fields):
+        warnings.warn(
+            "jaxcontact.sim.plasticity.JohnsonCook is deprecated: use "
+            "jaxcontact.sim.materials.AISI_1045 (any materials.JohnsonCook)",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        return materials.AISI_1045._replace(**dict(zip(_FIELDS, args, strict=False)), **fields)
 
 
 def _flow_stress(material, plastic_strain, rate, temperature):
@@ -26,9 +44,7 @@ def _update(material, state, strain_increment, dt):
 
 _HERE = "jaxcontact.sim.plasticity"
 _OLD = {
-    "JohnsonCook": deprecated(
-        f"{_HERE}.JohnsonCook", "jaxcontact.sim.materials.AISI_1045", _johnson_cook
-    ),
+    "JohnsonCook": _JohnsonCook,
     "flow_stress": deprecated(
         f"{_HERE}.flow_stress", "jaxcontact.sim.materials.JohnsonCook.flow_stress", _flow_stress
     ),

@@ -54,6 +54,7 @@ from jaxcontact.forces import penalty
 from jaxcontact.scenes import grid
 from jaxcontact.sim import tools
 from jaxcontact.sim._moved import deprecated as _deprecated
+from jaxcontact.sim._moved import forward as _forward
 from jaxcontact.sim.elements.triangle import Mesh, internal_forces, smallest_altitude, triangle_mesh
 from jaxcontact.sim.materials import STEEL, Elastic, inertial_density
 
@@ -63,7 +64,7 @@ MASS_SCALED_STEEL = STEEL._replace(mass_scale=1e4)
 # The cutting scene's tool (docs/scenes.md): a 7° clearance, faces 3 mm from
 # the tip, an edge of radius 0.05 drawn by 16 segments, the tip at height 4
 # (a depth of cut of 1 in a workpiece 5 high).
-SCENE_TOOL = tools.Tool(edge_radius=0.05, rake_face=3.0, flank=3.0, arc_segments=16)
+SCENE_TOOL = tools.Tool(edge_radius=0.05, clearance=7.0, rake_face=3.0, flank=3.0, arc_segments=16)
 TIP_HEIGHT = 4.0
 
 
@@ -125,7 +126,7 @@ class Controls(NamedTuple):
     """The traced parameters of a run: differentiate with respect to these.
 
     The time step is part of the static set-up, chosen for the nominal
-    stiffness: a much stiffer penalty needs a new ``ploughing`` set-up.
+    stiffness: a much stiffer penalty needs a new ``setup``.
     """
 
     rake: Array  # f[]  rake angle (radians)
@@ -399,5 +400,15 @@ class _Callable(types.ModuleType):
         return _ploughing(*args, **kwargs)
 
 
-_ploughing = _deprecated("jaxcontact.sim.ploughing", "jaxcontact.sim.ploughing.setup", setup)
+# Called as a module: the caller is three frames up (call, __call__, the caller).
+_ploughing = _deprecated(
+    "jaxcontact.sim.ploughing", "jaxcontact.sim.ploughing.setup", setup, stacklevel=3
+)
+__getattr__ = _forward(
+    __name__,
+    {
+        "ploughing": "jaxcontact.sim.ploughing.setup",
+        "Material": "jaxcontact.sim.materials.Elastic",
+    },
+)
 sys.modules[__name__].__class__ = _Callable

@@ -37,9 +37,12 @@ from jaxcontact import Surface
 class Tool:
     """A rigid tool's static geometry (mm, degrees).
 
+    Lengths in mm and angles in degrees, as a tool drawing gives them (the
+    rake angle, which a run may differentiate, is ``outline``'s, in radians).
+
     Attributes:
       edge_radius: the cutting edge's radius (mm; > 0).
-      clearance: the clearance angle (degrees).
+      clearance: the clearance angle (degrees, in (0, 90)).
       rake_face: the rake face's length from the sharp tip (mm).
       flank: the flank's length from the sharp tip (mm).
       arc_segments: segments drawing the edge's arc.
@@ -49,9 +52,9 @@ class Tool:
     """
 
     edge_radius: float
-    clearance: float = 7.0
-    rake_face: float = 0.6
-    flank: float = 0.3
+    clearance: float
+    rake_face: float
+    flank: float
     arc_segments: int = 8
     breaker: tuple[float, float, float] | None = None
 
@@ -67,6 +70,20 @@ class Tool:
             )
         if not (isinstance(self.arc_segments, int) and self.arc_segments >= 1):
             raise ValueError(f"Tool.arc_segments must be an int >= 1; got {self.arc_segments!r}")
+        if self.breaker is not None:
+            try:
+                land, angle, length = (float(v) for v in self.breaker)
+            except (TypeError, ValueError):
+                raise ValueError(
+                    "Tool.breaker must be None or (land mm, angle degrees, length mm); "
+                    f"got {self.breaker!r}"
+                ) from None
+            if not (land > 0 and 0 < angle < 90 and length > 0):
+                raise ValueError(
+                    "Tool.breaker (land, angle, length) needs land > 0, 0 < angle < 90 "
+                    f"degrees and length > 0; got {self.breaker!r}"
+                )
+            object.__setattr__(self, "breaker", (land, angle, length))
 
     @property
     def nodes(self) -> int:

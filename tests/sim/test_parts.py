@@ -16,7 +16,8 @@ from jaxcontact.sim import coupling, explicit, materials, tools
 from jaxcontact.sim.elements import q4, triangle
 from tests.tolerances import FLOAT32_ATOL, FLOAT64_EXACT_ATOL, FLOAT64_RTOL
 
-TOOL = tools.Tool(edge_radius=0.05, rake_face=1.0, flank=0.5, arc_segments=12)
+TOOL_FIELDS = {"edge_radius": 0.05, "clearance": 7.0, "rake_face": 1.0, "flank": 0.5}
+TOOL = tools.Tool(**TOOL_FIELDS, arc_segments=12)
 
 
 def test_a_tool_placed_by_its_tip_or_by_its_lowest_point_is_one_outline():
@@ -62,11 +63,15 @@ def test_the_edge_is_tangent_to_both_faces_at_any_rake_and_differentiable_in_it(
         (dict(clearance=95.0), "clearance"),
         (dict(rake_face=-1.0), "rake_face"),
         (dict(arc_segments=0), "arc_segments"),
+        (dict(breaker=(0.2, 95.0, 0.5)), "0 < angle < 90"),
+        (dict(breaker=(0.2, 30.0)), r"\(land mm, angle degrees, length mm\)"),
     ],
 )
 def test_a_tool_refuses_impossible_geometry(change, message):
     with pytest.raises(ValueError, match=message):
-        tools.Tool(**{"edge_radius": 0.05} | change)
+        tools.Tool(
+            **{"edge_radius": 0.05, "clearance": 7.0, "rake_face": 1.0, "flank": 0.5} | change
+        )
 
 
 def test_a_tool_is_placed_by_exactly_one_point():
@@ -181,6 +186,34 @@ def test_the_replaced_names_warn_naming_their_replacement_and_still_work():
         _ = solid.nothing
 
 
+def test_more_replaced_names_warn_and_keep_their_meaning():
+    from jaxcontact.sim import cutting, hertz, plasticity, ploughing, tool
+
+    with pytest.warns(DeprecationWarning, match=r"ploughing\.SCENE_TOOL\.arc_segments"):
+        assert tool.ARC_SEGMENTS == ploughing.SCENE_TOOL.arc_segments
+    with pytest.warns(DeprecationWarning, match=r"ploughing\.SCENE_TOOL\.edge_radius"):
+        assert tool.EDGE_RADIUS == ploughing.SCENE_TOOL.edge_radius
+    with pytest.warns(DeprecationWarning, match=r"jaxcontact\.sim\.ploughing\.setup"):
+        assert ploughing.ploughing is ploughing.setup
+    with pytest.warns(DeprecationWarning, match=r"materials\.Elastic"):
+        assert hertz.Material is materials.Elastic
+    # 1.1's Cutting.material was the mass-scaled steel: it still is.
+    cut = cutting.Cutting(mass_scaling=100.0)
+    with pytest.warns(DeprecationWarning, match=r"Cutting\.scaled"):
+        assert cut.material == cut.scaled == materials.AISI_1045._replace(mass_scale=100.0)
+    assert isinstance(materials.AISI_1045, plasticity.JohnsonCook)
+    with pytest.raises(ValueError, match="work_material must be a materials.JohnsonCook"):
+        cutting.Cutting(work_material=materials.STEEL)
+
+
+def test_a_module_called_as_its_old_function_warns_at_the_callers_line():
+    from jaxcontact.sim import ploughing
+
+    with pytest.warns(DeprecationWarning) as caught:
+        ploughing(300, travel=0.1)
+    assert caught[0].filename == __file__
+
+
 @pytest.mark.x64
 def test_the_old_explicit_keywords_warn_and_give_the_boundarys_step():
     material = materials.AISI_1045
@@ -192,3 +225,10 @@ def test_the_old_explicit_keywords_warn_and_give_the_boundarys_step():
     with pytest.warns(DeprecationWarning, match=r"explicit\.Boundary"):
         old, _ = explicit.step(material, quads, body, push, 1e-8, fixed=fixed)
     np.testing.assert_allclose(np.asarray(old.x), np.asarray(new.x), atol=FLOAT64_EXACT_ATOL)
+    # 1.1's positional order: fixed, velocity, partner, alive.
+    alive = jnp.ones(1, bool)
+    with pytest.warns(DeprecationWarning, match=r"explicit\.Boundary"):
+        old, _ = explicit.step(material, quads, body, push, 1e-8, fixed, None, None, alive)
+    np.testing.assert_allclose(np.asarray(old.x), np.asarray(new.x), atol=FLOAT64_EXACT_ATOL)
+    with pytest.raises(ValueError, match="velocity with fixed=None"):
+        explicit.step(material, quads, body, push, 1e-8, explicit.Boundary(velocity=push))
