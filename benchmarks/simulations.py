@@ -8,7 +8,8 @@ Three parts, the first two float32, each run as ``jaxcontact demo`` runs it:
    0.8 mm of travel, mass scaled 400x), then the same cut at half the mass scaling (200x: the
    stable step shorter by sqrt 2, the steps more by as much) and at half the element size
    (the mesh refined: 8 elements through h, about 8x the work). Then **other conditions**,
-   one run each, the default mesh: 200 m/min, h = 0.05 and 0.15 mm, rake +10° and -10°.
+   one run each, the default mesh: 200 m/min, h = 0.05 and 0.15 mm, rake +10° and -10°, and
+   Zorev's limit raised to the shear flow stress A / sqrt 3 (a shear factor of 1).
    Reported: the steady cutting and thrust forces (means over the last
    40 % of the steps, N per mm of width), the chip's thickness ratio and shear angle (from
    the chip's geometry), the friction angle (from the forces), beside
@@ -87,6 +88,9 @@ CONDITIONS = (
     ("h = 0.15 mm", {"uncut": 0.15}, 0.0),
     ("rake +10°", {}, 10.0),
     ("rake -10°", {}, -10.0),
+    # Zorev's limit at the shear flow stress A / sqrt 3 (twice the default's): the sticking
+    # friction Oxley-type analyses assume, which the Lagrangian chip root must carry.
+    ("sticking limit A/√3", {"shear_factor": 1.0}, 0.0),
 )
 # The quantities of the cutting table: (row, summary key, decimals; None: as it is).
 QUANTITIES = (
