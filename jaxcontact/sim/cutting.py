@@ -208,24 +208,21 @@ class Cutting:
             raise ValueError(f"Cutting.ahead must be >= 0 mm or None; got {self.ahead!r}")
         if self.breaker is not None:
             try:
-                land, angle, length = (float(v) for v in self.breaker)
-            except (TypeError, ValueError):
-                raise ValueError(
-                    "Cutting.breaker must be None or (land mm, angle degrees, length mm); "
-                    f"got {self.breaker!r}"
-                ) from None
+                # The tool checks the breaker's form (three numbers, an angle in (0, 90)).
+                breaker = self.tool.breaker
+            except ValueError as error:
+                raise ValueError(f"Cutting.breaker: {error}") from None
+            object.__setattr__(self, "breaker", breaker)
             # The land is measured from the sharp tip: it must reach past the
             # edge's tangent point on the rake face, r / tan(wedge / 2) from the
             # tip, farthest at the sharpest wedge the demo takes (rake +30°).
             wedge = math.radians(90.0 - 30.0 - CLEARANCE_DEG)
             tangent = self.edge_radius / math.tan(wedge / 2)
-            if not (land > tangent and 0 < angle < 90 and length > 0):
+            if not breaker[0] > tangent:
                 raise ValueError(
-                    f"Cutting.breaker (land, angle, length) needs land > the edge's tangent "
-                    f"point ({tangent:.3g} mm from the tip at a rake of 30°), 0 < angle < 90 "
-                    f"degrees and length > 0; got {self.breaker!r}"
+                    f"Cutting.breaker's land needs land > the edge's tangent point "
+                    f"({tangent:.3g} mm from the tip at a rake of 30°); got {self.breaker!r}"
                 )
-            object.__setattr__(self, "breaker", (land, angle, length))
             # The outline stays one simple polygon at every rake the demo takes
             # (±30°): the land's end left of the line from the flank's end to
             # the wall's end (a short, steep wall would fold the outline).

@@ -125,7 +125,7 @@ def test_a_chip_breaker_turns_the_rake_face_towards_the_chip():
     [
         (dict(breaker=(0.25, 95.0, 0.5)), "0 < angle < 90"),
         (dict(breaker=(0.001, 30.0, 0.5)), "land > the edge's tangent point"),
-        (dict(breaker=(0.25, 30.0)), "Cutting.breaker must be None or (land"),
+        (dict(breaker=(0.25, 30.0)), "Cutting.breaker: Tool.breaker must be None or (land"),
         (dict(breaker=(0.25, 80.0, 0.1)), "folds the tool's outline"),
         (dict(rake_face=0.0), "Cutting.rake_face must be > 0"),
         (dict(ahead=-1.0), "Cutting.ahead must be >= 0"),
