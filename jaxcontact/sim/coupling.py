@@ -3,8 +3,8 @@
 Three choices every explicit contact code makes, each an option here:
 
 * **The penalty's stiffness.** ``mass_penalty``: ``k_i = factor m_i / dt²``,
-  the form of LS-DYNA's soft constraint (Hallquist, *LS-DYNA Theory
-  Manual*, 2006, section 23.8.1): a node's contact spring is as stiff as its
+  the form of LS-DYNA's soft-constraint penalty (Hallquist, *LS-DYNA Theory
+  Manual*, 2006, the contact chapter): a node's contact spring is as stiff as its
   mass allows in the explicit step, so it stays stable whatever the node's
   mass and whatever the mass scaling (``m / dt²`` scales out). Stable for a
   factor below about 1.
