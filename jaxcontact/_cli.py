@@ -77,25 +77,25 @@ def _demo(args: argparse.Namespace) -> int:
             f"(p10 {timing.p10_s * 1e3:.3f}, p90 {timing.p90_s * 1e3:.3f})"
         )
 
-    if not _headless():
-        return 0
-    os.makedirs(args.out, exist_ok=True)
-    path = os.path.join(args.out, f"paper_scene_n{args.n}.png")
-    _draw(scene, contact, crossing, path)
-    print(f"wrote {path}")
+    _write_png(
+        args.out, f"paper_scene_n{args.n}.png", lambda path: _draw(scene, contact, crossing, path)
+    )
     return 0
 
 
-def _headless() -> bool:
-    """Whether a scene's PNG can be drawn: matplotlib, set to draw with no display; else
-    says why it is skipped."""
+def _write_png(folder: str, name: str, draw) -> None:
+    """``draw(path)`` into ``folder/name`` with matplotlib set to draw with no display,
+    and says where; without matplotlib, says why the PNG is skipped."""
     try:
         import matplotlib
     except ImportError:
         print('PNG skipped: matplotlib is not installed (pip install "jaxcontact[bench]").')
-        return False
+        return
     matplotlib.use("Agg")  # headless: no display needed
-    return True
+    os.makedirs(folder, exist_ok=True)
+    path = os.path.join(folder, name)
+    draw(path)
+    print(f"wrote {path}")
 
 
 def _draw(scene, contact, crossing, path: str) -> None:
@@ -205,12 +205,9 @@ def _hertz_demo(args: argparse.Namespace) -> int:
         f"  Newton: {result.newton_steps} steps, force residual {result.residual:.2g} N/mm; "
         f"{first_s:.1f} s with compilation, {solve_s:.2f} s compiled"
     )
-    if not _headless():
-        return 0
-    os.makedirs(args.out, exist_ok=True)
-    path = os.path.join(args.out, f"hertz_pressure_{result.across}.png")
-    _draw_hertz(result, path)
-    print(f"wrote {path}")
+    _write_png(
+        args.out, f"hertz_pressure_{result.across}.png", lambda path: _draw_hertz(result, path)
+    )
     return 0
 
 
