@@ -17,6 +17,7 @@ from typing import NamedTuple
 import jax.numpy as jnp
 
 from jaxcontact._pipeline.segments import Segments, finite_rows
+from jaxcontact._pipeline.sort import first_true
 from jaxcontact._types import Array
 
 
@@ -117,7 +118,7 @@ def cull_blocks(
         rows_meet = rows_meet & ok
     meets = _any_per_block(rows_meet, block_size)
     count = jnp.sum(meets, dtype=jnp.int32)
-    (kept,) = jnp.nonzero(meets, size=capacity, fill_value=num_blocks)
+    kept = first_true(meets, capacity)
     rows = kept[:, None] * block_size + jnp.arange(block_size, dtype=kept.dtype)[None, :]
     rows = jnp.where((kept[:, None] < num_blocks) & (rows < num_rows), rows, num_rows)
     return Blocks(

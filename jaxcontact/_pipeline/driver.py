@@ -129,37 +129,24 @@ def _choose_if(kernel, sizes: Sizes, go, queries: Queries, segments: Segments, b
     return in_stages(go, [search], [(no_choice, jnp.zeros((), bool))])
 
 
-def _as_rows(query, kept: _Kept, chosen, segments, ruling, blocks: Blocks, sizes, go, num_rows):
+def _as_rows(query, kept: _Kept, chosen, segments, ruling, blocks: Blocks, sizes, num_rows):
     """The N-row result: the kept slaves assembled, then written into their ``num_rows`` rows.
 
-    Assembly and write are each skipped when no block was kept.
+    Neither is skipped when no block was kept (the search is): a ``lax.cond``
+    around each cost more kernels than the work it skips on the kept slots,
+    and the N rows are written either way.
     """
     dtype = kept.points[0].dtype
-    no_overflow = jnp.zeros((), bool)
-
-    def assemble(chosen):
-        (choice, _), overflow = chosen
-        return query.assemble(kept.points, segments, choice, kept.radius, overflow, kept.ok, ruling)
-
-    def write(part):
-        nothing = writeback.empty(query.result, num_rows, dtype, part.overflow)
-        return writeback.write_blocks(part, blocks, nothing, sizes.block_size)
-
-    skipped = (
-        writeback.empty(query.result, kept.ok.shape[0], dtype, no_overflow),
-        writeback.empty(query.result, num_rows, dtype, no_overflow),
-    )
-    return in_stages(go, [assemble, write], list(skipped), chosen)
+    (choice, _), overflow = chosen
+    part = query.assemble(kept.points, segments, choice, kept.radius, overflow, kept.ok, ruling)
+    nothing = writeback.empty(query.result, num_rows, dtype, part.overflow)
+    return writeback.write_blocks(part, blocks, nothing, sizes.block_size)
 
 
 def _as_entries(query, kept: _Kept, chosen, segments, ruling, sizes: Sizes, go, num_rows):
     """``(the K-entry result, i32[] entries needed)``: only the kept slaves
     that may hold an answer (``query.reportable``) are assembled, at most K
-    of them, then the answered ones packed.
-
-    Assembly and packing are separate stages, so that XLA does not fuse the
-    pair evaluation into each field's gather and run it once per field
-    (2x slower at 81,939 rows).
+    of them, when a block was kept; then the answered ones packed.
     """
     capacity = sizes.contact_capacity
     dtype = kept.points[0].dtype
@@ -183,19 +170,16 @@ def _as_entries(query, kept: _Kept, chosen, segments, ruling, sizes: Sizes, go, 
         )
         return part, jnp.where(valid, kept.rows[at], num_rows), needed
 
-    def packed(part_rows_needed):
-        part, rows, needed = part_rows_needed
-        return writeback.pack(part, query.listing, query.flag, rows, capacity, num_rows), needed
-
-    nothing = writeback.empty(query.listing, capacity, dtype, no_overflow, num_rows)
-    skipped_part = (
+    skipped = (
         writeback.empty(query.result, capacity, dtype, no_overflow),
         jnp.full((capacity,), num_rows, jnp.int32),
         jnp.zeros((), jnp.int32),
     )
-    return in_stages(
-        go, [assemble, packed], [skipped_part, (nothing, jnp.zeros((), jnp.int32))], chosen
-    )
+    # The cond's boundary also keeps XLA from fusing the pair evaluation into
+    # each field's gather in ``pack`` and running it once per field (2x
+    # slower at 81,939 rows); the packing itself runs either way.
+    part, rows, needed = in_stages(go, [assemble], [skipped], chosen)
+    return writeback.pack(part, query.listing, query.flag, rows, capacity, num_rows), needed
 
 
 @searched_whole(rows="points")
@@ -250,7 +234,7 @@ def sized(
     chosen = search(go, *fixed, listed)
     ruling = (rule, kept.tags)
     if not capacity:
-        result = _as_rows(query, kept, chosen, segments, ruling, blocks, sizes, go, num_rows)
+        result = _as_rows(query, kept, chosen, segments, ruling, blocks, sizes, num_rows)
         return result._replace(overflow=result.overflow | overflow)
     result, needed = _as_entries(query, kept, chosen, segments, ruling, sizes, go, num_rows)
     result = result._replace(overflow=result.overflow | overflow)

@@ -64,3 +64,29 @@ def sorted_pairs(major: Array, minor: Array, num_minor: int, num_major: int) -> 
         return None
     packed = major.astype(jnp.int32) * num_minor + minor.astype(jnp.int32)
     return jax.lax.sort(packed) % num_minor
+
+
+# Up to this many flags, ``first_true`` compacts by a sort; above, by ``jnp.nonzero``.
+SORT_COMPACTION_UP_TO = 8192
+
+
+def first_true(flags: Array, size: int) -> Array:
+    """i32[size]: the indices of the first ``size`` True ``flags`` (bool[S]), in
+    increasing order, ``S`` past the last.
+
+    ``jnp.nonzero(size=)`` compiles to 17-27 kernels on XLA's CPU (a cumsum, a
+    scatter, and the reductions XLA splits them into); one sort of the unique
+    keys ``i`` (True) or ``S + i`` (False) is 3. The sort costs more per flag:
+    measured 0.047 against 0.065 ms at 640 flags, 0.27 against 0.22 at 15,625
+    and 1.75 against 1.31 at 81,920 (one process, both cores), so the sort
+    serves up to ``SORT_COMPACTION_UP_TO`` flags, where a kernel's fixed cost
+    (about 1-1.6 us) outweighs it.
+    """
+    num_flags = flags.shape[0]
+    if num_flags > SORT_COMPACTION_UP_TO:
+        return jnp.nonzero(flags, size=size, fill_value=num_flags)[0].astype(jnp.int32)
+    position = jnp.arange(num_flags, dtype=jnp.int32)
+    keys = jax.lax.sort(jnp.where(flags, position, num_flags + position))
+    if size > num_flags:
+        keys = jnp.pad(keys, (0, size - num_flags), constant_values=2 * num_flags)
+    return jnp.minimum(keys[:size], num_flags)

@@ -12,6 +12,7 @@ import jax
 import jax.numpy as jnp
 
 from jaxcontact._pipeline.broad import Blocks
+from jaxcontact._pipeline.sort import first_true
 from jaxcontact._types import Array
 
 # What a row (or entry) of nothing found holds, by field: -1 for an index,
@@ -57,7 +58,7 @@ def first_slots(flags: Array, capacity: int) -> tuple[Array, Array, Array]:
     """
     num_slots = flags.shape[0]
     count = jnp.sum(flags, dtype=jnp.int32)
-    (slots,) = jnp.nonzero(flags, size=capacity, fill_value=num_slots)
+    slots = first_true(flags, capacity)
     return jnp.minimum(slots, max(num_slots - 1, 0)), slots < num_slots, count
 
 
