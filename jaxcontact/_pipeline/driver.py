@@ -129,18 +129,27 @@ def _choose_if(kernel, sizes: Sizes, go, queries: Queries, segments: Segments, b
     return in_stages(go, [search], [(no_choice, jnp.zeros((), bool))])
 
 
-def _as_rows(query, kept: _Kept, chosen, segments, ruling, blocks: Blocks, sizes, num_rows):
+def _as_rows(query, kept: _Kept, chosen, segments, ruling, blocks: Blocks, sizes, go, num_rows):
     """The N-row result: the kept slaves assembled, then written into their ``num_rows`` rows.
 
-    Neither is skipped when no block was kept (the search is): a ``lax.cond``
-    around each cost more kernels than the work it skips on the kept slots,
-    and the N rows are written either way.
+    Assembly and write are each skipped when no block was kept.
     """
     dtype = kept.points[0].dtype
-    (choice, _), overflow = chosen
-    part = query.assemble(kept.points, segments, choice, kept.radius, overflow, kept.ok, ruling)
-    nothing = writeback.empty(query.result, num_rows, dtype, part.overflow)
-    return writeback.write_blocks(part, blocks, nothing, sizes.block_size)
+    no_overflow = jnp.zeros((), bool)
+
+    def assemble(chosen):
+        (choice, _), overflow = chosen
+        return query.assemble(kept.points, segments, choice, kept.radius, overflow, kept.ok, ruling)
+
+    def write(part):
+        nothing = writeback.empty(query.result, num_rows, dtype, part.overflow)
+        return writeback.write_blocks(part, blocks, nothing, sizes.block_size)
+
+    skipped = (
+        writeback.empty(query.result, kept.ok.shape[0], dtype, no_overflow),
+        writeback.empty(query.result, num_rows, dtype, no_overflow),
+    )
+    return in_stages(go, [assemble, write], list(skipped), chosen)
 
 
 def _as_entries(query, kept: _Kept, chosen, segments, ruling, sizes: Sizes, go, num_rows):
@@ -234,7 +243,7 @@ def sized(
     chosen = search(go, *fixed, listed)
     ruling = (rule, kept.tags)
     if not capacity:
-        result = _as_rows(query, kept, chosen, segments, ruling, blocks, sizes, num_rows)
+        result = _as_rows(query, kept, chosen, segments, ruling, blocks, sizes, go, num_rows)
         return result._replace(overflow=result.overflow | overflow)
     result, needed = _as_entries(query, kept, chosen, segments, ruling, sizes, go, num_rows)
     result = result._replace(overflow=result.overflow | overflow)
