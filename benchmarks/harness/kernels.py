@@ -1,6 +1,6 @@
 """Kernels and compile time of each ``Search.closest`` step on the quick scenes, fast.
 
-    python benchmarks/step_kernels.py
+    python -m benchmarks.harness.kernels
 
 Compiles (does not run) the four ``benchmarks/targets.py`` step forms on its ``QUICK`` scenes,
 with ``jax_enable_x64`` as the process has it (on by default here, as the suite runs; the
@@ -12,12 +12,7 @@ targets table is the record.
 
 from __future__ import annotations
 
-import pathlib
-import sys
 import time
-
-if __package__ in (None, ""):
-    sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 
 from benchmarks import targets
 from benchmarks.harness import program
