@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
+import jax
 import jax.numpy as jnp
 
 from jaxcontact._pipeline.segments import Segments, finite_rows
@@ -30,11 +31,35 @@ def conservative_margin(distance: Array, *coordinates: Array) -> Array:
     candidates.
     """
     dtype = distance.dtype
-    scale = jnp.zeros((), dtype)
-    for values in coordinates:
-        finite = jnp.where(jnp.isfinite(values), jnp.abs(values), 0)
-        scale = jnp.maximum(scale, jnp.max(finite, initial=0))
+    planes = [
+        jnp.where(jnp.isfinite(plane), jnp.abs(plane), 0).astype(dtype)
+        for values in coordinates
+        for plane in (values[..., 0], values[..., 1])
+    ]
+    scale = jnp.max(jnp.stack(bounds(planes, [jnp.maximum] * len(planes))), initial=0)
     return distance * (1 + 2.0**-8) + 16 * jnp.finfo(dtype).eps * scale
+
+
+def bounds(planes, combine) -> list:
+    """Each of ``planes`` (arrays of one shape) reduced over all its elements by its own
+    of ``combine`` (``jnp.minimum`` or ``jnp.maximum``), in one variadic reduce.
+
+    XLA's CPU compiler splits a single-operand reduction over more than 32
+    elements into 2-4 kernels (its tree-reduction rewriter) and leaves a
+    variadic one whole: the master's box, its margin and the grid's region
+    are each one kernel so. Minimum and maximum are exact, so the values are
+    those of ``jnp.min`` and ``jnp.max``.
+    """
+    inits = [
+        jnp.array(jnp.inf if op is jnp.minimum else -jnp.inf, plane.dtype)
+        for plane, op in zip(planes, combine, strict=True)
+    ]
+
+    def reducer(first, second):
+        return tuple(op(a, b) for op, a, b in zip(combine, first, second, strict=True))
+
+    axes = tuple(range(planes[0].ndim))
+    return list(jax.lax.reduce(tuple(planes), tuple(inits), reducer, axes))
 
 
 class Box(NamedTuple):
@@ -52,9 +77,14 @@ def segment_boxes(segments: Segments, inflate: Array) -> Box:
     return Box(jnp.where(ok, low, jnp.inf), jnp.where(ok, high, -jnp.inf))
 
 
-def enclosing(boxes: Box, axis: int = 0) -> Box:
-    """The box around ``boxes`` along ``axis`` (empty boxes contribute nothing)."""
-    return Box(jnp.min(boxes.low, axis=axis), jnp.max(boxes.high, axis=axis))
+def enclosing(boxes: Box) -> Box:
+    """The box around ``boxes`` (f[M, 2] each; empty boxes contribute nothing), one
+    variadic reduce (``bounds``)."""
+    low_x, low_y, high_x, high_y = bounds(
+        [boxes.low[:, 0], boxes.low[:, 1], boxes.high[:, 0], boxes.high[:, 1]],
+        [jnp.minimum, jnp.minimum, jnp.maximum, jnp.maximum],
+    )
+    return Box(jnp.stack([low_x, low_y]), jnp.stack([high_x, high_y]))
 
 
 def overlaps(first: Box, second: Box) -> Array:

@@ -60,10 +60,18 @@ def sorted_pairs(major: Array, minor: Array, num_minor: int, num_major: int) -> 
     position carried, so it fits where ``stable_order``'s ``key * E +
     position`` would not (E is several entries per segment).
     """
+    keys = sorted_pair_keys(major, minor, num_minor, num_major)
+    return None if keys is None else keys % num_minor
+
+
+def sorted_pair_keys(major: Array, minor: Array, num_minor: int, num_major: int) -> Array | None:
+    """i32[E]: ``sorted_pairs``' packed keys ``major * num_minor + minor``, sorted, or
+    None where they do not fit in int32 (``key // num_minor`` is the major, ``key %
+    num_minor`` the minor)."""
     if not packs(num_major, num_minor):
         return None
     packed = major.astype(jnp.int32) * num_minor + minor.astype(jnp.int32)
-    return jax.lax.sort(packed) % num_minor
+    return jax.lax.sort(packed)
 
 
 # Up to this many flags, ``first_true`` compacts by a sort; above, by ``jnp.nonzero``.

@@ -47,7 +47,7 @@ def test_binning_by_packed_pairs_is_the_stable_sorts(monkeypatch):
     ok = jnp.asarray(rng.random(50) < 0.8)
     grid = Grid(jnp.zeros(2, jnp.float32), jnp.asarray(1.0, jnp.float32))
     packed = bin_segments(boxes, ok, grid, (10, 10), (4, 4), 50)
-    monkeypatch.setattr(_cells, "sorted_pairs", lambda *args: None)
+    monkeypatch.setattr(_cells, "sorted_pair_keys", lambda *args: None)
     stable = bin_segments(boxes, ok, grid, (10, 10), (4, 4), 50)
     for got, wanted in zip(packed, stable, strict=True):
         np.testing.assert_array_equal(np.asarray(got), np.asarray(wanted))
