@@ -3,6 +3,8 @@
     python -m benchmarks.harness.kernels
 
 Compiles (does not run) the four ``benchmarks/targets.py`` step forms on its ``QUICK`` scenes,
+and a ``Search.swept`` step in both result forms on ``benchmarks/swept_peers.py``'s first
+quick scene,
 with ``jax_enable_x64`` as the process has it (on by default here, as the suite runs; the
 targets table runs it off), and prints the kernels XLA's CPU runtime would run per call
 (``benchmarks.harness.program``: both branches of a ``lax.cond`` count), the ``while`` loops'
@@ -14,22 +16,38 @@ from __future__ import annotations
 
 import time
 
-from benchmarks import targets
+import jax
+
+from benchmarks import swept_peers, targets
 from benchmarks.harness import program
+from jaxcontact import Search
+
+
+def show(scene: str, name: str, fn, args) -> None:
+    """One line: ``fn`` compiled for ``args``, its kernels, loop trips and compile time."""
+    start = time.perf_counter()
+    compiled = fn.lower(*args).compile()
+    seconds = time.perf_counter() - start
+    shape = program.describe(compiled)
+    print(
+        f"{scene:45s} {name:40s} "
+        f"kernels {shape.kernels:4d}  loops {shape.loops}  compile {seconds:.2f} s"
+    )
 
 
 def main() -> None:
     for kind, size, parameter in targets.QUICK:
         x, surface, radius, pair = targets.build(kind, size, parameter)
         for name, (fn, args) in targets.search_steps(x, surface, radius, pair).items():
-            start = time.perf_counter()
-            compiled = fn.lower(*args).compile()
-            seconds = time.perf_counter() - start
-            shape = program.describe(compiled)
-            print(
-                f"{targets.label(kind, size, parameter):45s} {name:40s} "
-                f"kernels {shape.kernels:4d}  loops {shape.loops}  compile {seconds:.2f} s"
-            )
+            show(targets.label(kind, size, parameter), name, fn, args)
+    kind, size, parameters = swept_peers.QUICK_SCENES[0]
+    scene = swept_peers.build(kind, size, parameters)
+    for compact in (False, True):
+        search = Search(compact=compact)
+        state = search.allocate(scene.x, scene.surface, x_prev=scene.x_prev)
+        args = (state, scene.x_prev, scene.x, scene.surface)
+        name = "Search.swept" + (" (compact)" if compact else "")
+        show(f"{kind}, {size:,} nodes", name, jax.jit(search.swept), args)
 
 
 if __name__ == "__main__":
