@@ -728,7 +728,15 @@ def _closest(search: Search, state: SearchState, x, surface, mask, radius, pairi
     sizes = state.sizes
     reach = jnp.asarray(search._reach, x.dtype)
     # A radius past the bound the sizes were built for may miss a contact.
-    beyond = jnp.any(_segments.rows_ok(x, mask) & (radius > search.radius))
+    real = _segments.rows_ok(x, mask)
+    if jnp.ndim(radius) == 0:
+        # The scalar test apart: where the radius is a constant within the
+        # bound it folds to False and the pass over the rows goes. Written
+        # elementwise, XLA constant-folds its split reduction over all N rows
+        # first (1.35 s of a 3.4 s compile at 10^6 rows).
+        beyond = (radius > search.radius) & jnp.any(real)
+    else:
+        beyond = jnp.any(real & (radius > search.radius))
 
     def flagged(contact):
         return contact._replace(overflow=contact.overflow | beyond)

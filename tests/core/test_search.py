@@ -335,3 +335,30 @@ def test_settings_are_plain_numbers_and_a_batch_may_share_its_mask_and_segments(
     for b in range(2):
         expected = all_to_all(xs[b], Surface(nodes[b], segments), radius=0.1, mask=mask)
         assert_same_contact(jax.tree.map(lambda v, b=b: v[b], contacts), expected, 0.1)
+
+
+def test_a_radius_past_the_search_bound_says_so_unless_no_row_is_real():
+    # The sizes hold contacts within Search.radius: a larger radius at a step may
+    # miss one, which overflow says, for a scalar radius and one per slave alike; a
+    # scene with no real row misses nothing.
+    xs, nodes, segments = trajectory(jnp.float32, steps=1)
+    x, surface = xs[0], surface_at(nodes[0], segments)
+    search = Search(radius=RADIUS)
+    state = search.allocate(x, surface)
+
+    def closest(state, x, radius, mask):
+        return search.closest(state, x, surface, radius=radius, mask=mask)
+
+    step = jax.jit(closest)
+    real, none = jnp.ones(x.shape[0], bool), jnp.zeros(x.shape[0], bool)
+    per_slave = jnp.full(x.shape[0], RADIUS / 2, x.dtype).at[7].set(2 * RADIUS)
+    for radius, mask, flagged in [
+        (RADIUS / 2, real, False),
+        (RADIUS, real, False),
+        (2 * RADIUS, real, True),
+        (2 * RADIUS, none, False),
+        (per_slave, real, True),
+        (per_slave, real.at[7].set(False), False),
+    ]:
+        contact, _ = step(state, x, jnp.asarray(radius, x.dtype), mask)
+        assert bool(contact.overflow) == flagged, (radius, flagged)
