@@ -7,13 +7,15 @@ and a ``Search.swept`` step in both result forms on ``benchmarks/swept_peers.py`
 quick scene,
 with ``jax_enable_x64`` as the process has it (on by default here, as the suite runs; the
 targets table runs it off), and prints the kernels XLA's CPU runtime would run per call
-(``benchmarks.harness.program``: both branches of a ``lax.cond`` count), the ``while`` loops'
-trip counts and the compile time. For a quick look at a change to the step's shape; the
-targets table is the record.
+(``benchmarks.harness.program``: both branches of a ``lax.cond`` count), those on the path a
+step with kept slaves takes (``taken``: of each ``lax.cond`` its larger branch; a loop's body
+once), the ``while`` loops' trip counts and the compile time. For a quick look at a change
+to the step's shape; the targets table is the record.
 """
 
 from __future__ import annotations
 
+import re
 import time
 
 import jax
@@ -23,15 +25,42 @@ from benchmarks.harness import program
 from jaxcontact import Search
 
 
+def taken(text: str) -> int:
+    """The kernels of an optimised HLO ``text`` on the path a step with kept slaves takes:
+    of each ``conditional`` its branch of most kernels (the stages' work, not their skip),
+    of a ``while`` or ``call`` its computations once."""
+    _, bodies = program.computations(text)
+
+    def kernels(name: str) -> int:
+        total = 0
+        for line in bodies.get(name, []):
+            opcode = program._opcode(line)
+            callees = [
+                callee
+                for single, listed in program._CALLEES.findall(line)
+                for callee in ([single] if single else re.findall(r"%([\w.\-]+)", listed))
+            ]
+            if opcode == "conditional":
+                total += max(map(kernels, callees))
+            elif opcode in program.CONTROL:
+                total += sum(map(kernels, callees))
+            elif opcode and opcode not in program.FREE:
+                total += 1
+        return total
+
+    return kernels(program.computations(text)[0])
+
+
 def show(scene: str, name: str, fn, args) -> None:
-    """One line: ``fn`` compiled for ``args``, its kernels, loop trips and compile time."""
+    """One line: ``fn`` compiled for ``args``, its kernels (all, and ``taken``), loop trips
+    and compile time."""
     start = time.perf_counter()
     compiled = fn.lower(*args).compile()
     seconds = time.perf_counter() - start
     shape = program.describe(compiled)
     print(
-        f"{scene:45s} {name:40s} "
-        f"kernels {shape.kernels:4d}  loops {shape.loops}  compile {seconds:.2f} s"
+        f"{scene:45s} {name:40s} kernels {shape.kernels:4d} (taken "
+        f"{taken(compiled.as_text()):4d})  loops {shape.loops}  compile {seconds:.2f} s"
     )
 
 
