@@ -4,7 +4,7 @@ Slip tracking and smooth normals concern only the slaves a search found:
 a few hundred of 10^5 on a cutting scene. Done on all N rows, their gathers
 cost several times the search itself (measured with the repository's
 benchmarks/costs.py). Here the rows that need the work are gathered into
-a static capacity ``C`` (the ``size`` of ``jnp.nonzero``), worked on, and
+a static capacity ``C`` (``sort.first_true``), worked on, and
 scattered back; when more rows need it than ``C`` holds, a ``cond`` does the
 work on all N rows instead, so no row is ever left out. Under ``vmap`` the
 ``cond`` runs both branches.
@@ -17,6 +17,7 @@ from collections.abc import Callable
 import jax
 import jax.numpy as jnp
 
+from jaxcontact._pipeline.sort import first_true
 from jaxcontact._types import Array
 
 SMALLEST_CAPACITY = 1024  # at or below this many rows, every row is worked on
@@ -43,8 +44,7 @@ def on_rows(needed: Array, compute: Callable[[Array], object]):
         return _zeroed(compute(every), needed)
 
     def few():
-        (rows,) = jnp.nonzero(needed, size=limit, fill_value=num_rows)
-        rows = rows.astype(jnp.int32)
+        rows = first_true(needed, limit)
 
         def spread(values):
             empty = jnp.zeros((num_rows,) + values.shape[1:], values.dtype)
