@@ -4,9 +4,8 @@
 
 Compiles (does not run) the four ``benchmarks/targets.py`` step forms on its ``QUICK`` scenes,
 and a ``Search.swept`` step in both result forms on ``benchmarks/swept_peers.py``'s first
-quick scene,
-with ``jax_enable_x64`` as the process has it (on by default here, as the suite runs; the
-targets table runs it off), and prints the kernels XLA's CPU runtime would run per call
+quick scene, with ``jax_enable_x64`` as the process has it (on by default here, as the suite
+runs; the targets table runs it off), and prints the kernels XLA's CPU runtime would run per call
 (``benchmarks.harness.program``: both branches of a ``lax.cond`` count), those on the path a
 step with kept slaves takes (``taken``: of each ``lax.cond`` its larger branch; a loop's body
 once), the ``while`` loops' trip counts and the compile time. For a quick look at a change
@@ -29,7 +28,7 @@ def taken(text: str) -> int:
     """The kernels of an optimised HLO ``text`` on the path a step with kept slaves takes:
     of each ``conditional`` its branch of most kernels (the stages' work, not their skip),
     of a ``while`` or ``call`` its computations once."""
-    _, bodies = program.computations(text)
+    entry, bodies = program.computations(text)
 
     def kernels(name: str) -> int:
         total = 0
@@ -48,7 +47,7 @@ def taken(text: str) -> int:
                 total += 1
         return total
 
-    return kernels(program.computations(text)[0])
+    return kernels(entry)
 
 
 def show(scene: str, name: str, fn, args) -> None:
