@@ -20,6 +20,7 @@ from jaxcontact import (
     swept,
 )
 from jaxcontact.forces import penalty
+from tests.helpers import local_atol
 
 PACKAGE = pathlib.Path(jaxcontact.__file__).resolve().parent
 
@@ -175,7 +176,15 @@ def test_exhaustive_detectors_take_any_mix_of_concrete_and_traced_arguments(dete
     plain = run(*CONCRETE)
     got = _traced_call(run, traced)
     for field, want in plain._asdict().items():
-        np.testing.assert_array_equal(np.asarray(getattr(got, field)), np.asarray(want), field)
+        got_field, want = np.asarray(getattr(got, field)), np.asarray(want)
+        if np.issubdtype(want.dtype, np.floating):
+            # Two programs (op by op, and jitted around the traced
+            # arguments): XLA contracts a*b+c into fused multiply-adds per
+            # fusion, so a coordinate may differ in its last bits.
+            atol = local_atol(want.dtype, float(np.max(np.abs(NODES))))
+            np.testing.assert_allclose(got_field, want, rtol=0, atol=atol, err_msg=field)
+        else:
+            np.testing.assert_array_equal(got_field, want, field)
     assert bool(plain.found.any() if detector == "all_to_all" else plain.crossed.any())
 
 
