@@ -38,6 +38,12 @@ def cross(u: Array, v: Array) -> Array:
     return u[0] * v[1] - u[1] * v[0]
 
 
+def minus(p: Array, q: Array) -> tuple[Array, Array]:
+    """``p - q`` of two 2D vectors, as the pair ``(x, y)``: for kernels scored over
+    blocks of gathered pairs, which must form no whole vector (``_offset``)."""
+    return p[0] - q[0], p[1] - q[1]
+
+
 def cross_sign(u: Array, v: Array) -> Array:
     """The sign (-1, 0 or 1, in ``u``'s dtype) of ``cross(u, v)``, by comparing its two products.
 
@@ -95,8 +101,7 @@ def _offset(
     # the vector is such a read; one operation on the whole vector has XLA
     # write the block's vectors out first (the cell search on the rough die
     # at 10^5 x 10^4 measured 2x slower so).
-    from_a = (x[0] - a[0], x[1] - a[1])
-    from_b = (x[0] - b[0], x[1] - b[1])
+    from_a, from_b = minus(x, a), minus(x, b)
     along_a = dot(from_a, d)
     along_b = dot(from_b, d)
     # The clamps are decided by sign, not from the rounded ratio, so a slave
@@ -238,14 +243,18 @@ def path_hit(
     Returns:
       A ``PathHit`` of scalars.
     """
-    d = b - a if direction is None else direction
-    u = x - x_prev
+    # Differences per coordinate, as in ``_offset``: the searches score
+    # blocks of gathered pairs.
+    d = minus(b, a) if direction is None else direction
+    u = minus(x, x_prev)
+    from_a_prev, from_a_now = minus(x_prev, a), minus(x, a)
+    a_from_prev, b_from_prev = minus(a, x_prev), minus(b, x_prev)
     # Which side of the segment's line each end of the path lies on.
-    side_prev = cross(d, x_prev - a)
-    side_now = cross(d, x - a)
+    side_prev = cross(d, from_a_prev)
+    side_now = cross(d, from_a_now)
     # Which side of the path's line each end of the segment lies on.
-    side_a = cross(u, a - x_prev)
-    side_b = cross(u, b - x_prev)
+    side_a = cross(u, a_from_prev)
+    side_b = cross(u, b_from_prev)
     meets_line = ((side_prev <= 0) & (side_now >= 0)) | ((side_prev >= 0) & (side_now <= 0))
     straddles = ((side_a <= 0) & (side_b >= 0)) | ((side_a >= 0) & (side_b <= 0))
     on_line = (side_prev == 0) & (side_now == 0)
@@ -258,15 +267,15 @@ def path_hit(
     denominator = side_prev - side_now
     length_u = dot(u, u)
     through_b, through_a = side_b == 0, side_a == 0
-    numerator = jnp.where(through_b, dot(b - x_prev, u), numerator)
+    numerator = jnp.where(through_b, dot(b_from_prev, u), numerator)
     denominator = jnp.where(through_b, length_u, denominator)
-    numerator = jnp.where(through_a, dot(a - x_prev, u), numerator)
+    numerator = jnp.where(through_a, dot(a_from_prev, u), numerator)
     denominator = jnp.where(through_a, length_u, denominator)
     # Along the segment's own line (collinear, or no motion on it): the
     # projections p = (y - a).d of the path's ends; the segment is p in [0, d.d].
     length_d = dot(d, d) if length_squared is None else length_squared
-    along_prev = dot(x_prev - a, d)
-    along_now = dot(x - a, d)
+    along_prev = dot(from_a_prev, d)
+    along_now = dot(from_a_now, d)
     starts_inside = (along_prev >= 0) & (along_prev <= length_d)
     entry = jnp.where(along_prev < 0, 0, length_d)
     numerator = jnp.where(on_line, jnp.where(starts_inside, 0, entry - along_prev), numerator)
