@@ -19,17 +19,11 @@ suite's time is XLA compiling. The older emitters give the same answers bit
 for bit and compile about a third faster than XLA's defaults; LLVM's
 optimisation off takes another third off the whole suite, and its
 floating-point results may differ from the optimised code's in the last
-bits (docs/development.md has the measurements). LLVM's fast instruction
-selector, which it uses without optimisation, is turned off
-(``-fast-isel=0``): it hands the instructions it cannot select, and the rest
-of their block, to the full selector, which contracts a*b+c into a fused
-multiply-add where the fast one does not, so one loop could round the same
-pair two ways and break an exact tie between its steps
-(tests/core/test_all_to_all.py's tie across segment blocks did); it costs
-about 5 % of the suite's time. Every test passed so but
-one, whose check depends on the optimised code (two routes of one
-arithmetic agreeing to the last bit): it compiles its program with XLA's
-defaults itself (tests/core/test_small_paths.py).
+bits (docs/development.md has the measurements). Every test passed so but
+two, whose checks depend on the optimised code (two routes of one
+arithmetic, or two steps of one loop, agreeing to the last bit): they compile
+their programs with XLA's defaults themselves (``tests.helpers.XLA_DEFAULTS``;
+tests/core/test_small_paths.py and tests/core/test_all_to_all.py).
 ``JAXCONTACT_FAST_COMPILE=0`` compiles with XLA's defaults instead;
 ``tests/test_x64_off.py`` runs its pass that way, so that the path most
 users run (x64 off, XLA's default code generation) is tested as they run
@@ -50,11 +44,7 @@ X64 = os.environ.get("JAXCONTACT_X64", "1") != "0"
 # suites inherit them (tests/test_x64_off.py's pass strips them again).
 # Any value of either option already there is dropped first, so that the
 # x64-off pass really gets XLA's defaults.
-FAST_COMPILE = (
-    "--xla_cpu_use_fusion_emitters=false",
-    "--xla_backend_optimization_level=0",
-    "--xla_backend_extra_options=-fast-isel=0",
-)
+FAST_COMPILE = ("--xla_cpu_use_fusion_emitters=false", "--xla_backend_optimization_level=0")
 _NAMES = {flag.split("=")[0] for flag in FAST_COMPILE}
 _FLAGS = [
     flag for flag in os.environ.get("XLA_FLAGS", "").split() if flag.split("=")[0] not in _NAMES

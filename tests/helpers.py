@@ -49,6 +49,15 @@ def eps(dtype) -> float:
     return float(np.finfo(np.dtype(dtype)).eps)
 
 
+# XLA's default CPU code generation, as users compile (``jax.jit(...,
+# compiler_options=XLA_DEFAULTS)``), for the few tests whose checks need it:
+# the suite compiles without LLVM's optimisation (tests/conftest.py), where
+# LLVM's fast instruction selector leaves part of a loop to the full one, and
+# only the full one contracts a*b+c into a fused multiply-add, so the same
+# numbers can round two ways in one program.
+XLA_DEFAULTS = {"xla_backend_optimization_level": 3, "xla_cpu_use_fusion_emitters": True}
+
+
 def local_atol(dtype, scale: float = 1.0) -> float:
     """Absolute tolerance for a value of size ``scale`` computed in ``dtype``."""
     return LOCAL_ULPS[np.dtype(dtype)] * eps(dtype) * scale

@@ -40,9 +40,7 @@ def test_plane_chooses_as_the_running_minimum_does():
     # With XLA's default code generation, as users compile it: the suite
     # (tests/conftest.py) leaves LLVM's optimisation off, and there the two
     # routes' float64 squared distances were seen 1 ulp apart (1 row of 11).
-    defaults = {"xla_backend_optimization_level": 3, "xla_cpu_use_fusion_emitters": True}
-
-    @functools.partial(jax.jit, compiler_options=defaults)
+    @functools.partial(jax.jit, compiler_options=helpers.XLA_DEFAULTS)
     def both(x, starts, ends, ok):
         edges = edge(starts, ends)
 
