@@ -14,7 +14,6 @@ to the step's shape; the targets table is the record.
 
 from __future__ import annotations
 
-import re
 import time
 
 import jax
@@ -33,17 +32,12 @@ def taken(text: str) -> int:
     def kernels(name: str) -> int:
         total = 0
         for line in bodies.get(name, []):
-            opcode = program._opcode(line)
-            callees = [
-                callee
-                for single, listed in program._CALLEES.findall(line)
-                for callee in ([single] if single else re.findall(r"%([\w.\-]+)", listed))
-            ]
-            if opcode == "conditional":
-                total += max(map(kernels, callees))
-            elif opcode in program.CONTROL:
-                total += sum(map(kernels, callees))
-            elif opcode and opcode not in program.FREE:
+            code = program.opcode(line)
+            if code == "conditional":
+                total += max(map(kernels, program.callees(line)))
+            elif code in program.CONTROL:
+                total += sum(map(kernels, program.callees(line)))
+            elif program.is_kernel(code):
                 total += 1
         return total
 

@@ -75,7 +75,7 @@ class Shape(NamedTuple):
     minimum_bytes: int  # the inputs' bytes plus the outputs'
 
 
-def _opcode(line: str) -> str:
+def opcode(line: str) -> str:
     """The opcode of an instruction line: the word after its result type (a tuple type's
     parentheses skipped, however nested)."""
     rest = line.split("= ", 1)[1] if "= " in line else ""
@@ -112,6 +112,20 @@ def computations(text: str) -> tuple[str, dict[str, list[str]]]:
     return entry, bodies
 
 
+def callees(line: str) -> list[str]:
+    """The computations a control instruction line (``CONTROL``) runs, in order."""
+    return [
+        callee
+        for single, listed in _CALLEES.findall(line)
+        for callee in ([single] if single else re.findall(r"%([\w.\-]+)", listed))
+    ]
+
+
+def is_kernel(code: str) -> bool:
+    """Whether an instruction of opcode ``code`` is a kernel (one thunk) of its own."""
+    return bool(code) and code not in FREE | CONTROL
+
+
 def executed(text: str) -> list[Instruction]:
     """Every instruction a call runs: the entry computation's and those of every computation
     a control instruction (``CONTROL``) reaches, each computation once (a loop body is not
@@ -124,19 +138,16 @@ def executed(text: str) -> list[Instruction]:
             continue
         seen.add(name)
         for line in bodies[name]:
-            opcode = _opcode(line)
-            found.append(Instruction(line, opcode, name))
-            if opcode in CONTROL:
-                for single, listed in _CALLEES.findall(line):
-                    todo += [single] if single else re.findall(r"%([\w.\-]+)", listed)
+            code = opcode(line)
+            found.append(Instruction(line, code, name))
+            if code in CONTROL:
+                todo += callees(line)
     return found
 
 
 def kernel_lines(text: str) -> list[str]:
     """The lines of an optimised HLO ``text`` that are its kernels (one thunk each)."""
-    return [
-        each.line for each in executed(text) if each.opcode and each.opcode not in FREE | CONTROL
-    ]
+    return [each.line for each in executed(text) if is_kernel(each.opcode)]
 
 
 def kind_of(line: str, bodies: dict[str, list[str]]) -> str:
@@ -144,7 +155,7 @@ def kind_of(line: str, bodies: dict[str, list[str]]) -> str:
     (``bodies``: ``computations``' second item), or its own opcode for an unfused one."""
     called = re.search(r"calls=%([\w.\-]+)", line)
     lines = bodies.get(called.group(1), []) if called else [line]
-    ops = {_opcode(each) for each in lines}
+    ops = {opcode(each) for each in lines}
     # A scalar result: the type right after "= " has no dimensions (or is a tuple of such).
     scalar = re.search(r"= (?:\w+\[\]|\([^)]*\w+\[\][^)]*\))", line) is not None
     if "sort" in ops:
