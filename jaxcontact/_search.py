@@ -342,6 +342,8 @@ class Search:
                     path_sizes, at_least, "path_sizes", x, pooled, mask, x_prev=x_prev
                 )
                 path_sizes = self._path_room(path_sizes, x_prev, x, pooled, mask, at_least, pairing)
+        if self.method != "exhaustive" and at_least is None:
+            _warn_if_none_near(x, pooled, mask, self.radius and self._reach, x_prev)
         state = self._state(sizes, path_sizes, candidates, overflow, (), x)
         return _kept_history(state, at_least)
 
@@ -704,6 +706,44 @@ def _kept_history(state: SearchState, at_least) -> SearchState:
     return dataclasses.replace(state, history=old)
 
 
+def _warn_if_none_near(x, surface: Surface, mask, reach, x_prev) -> None:
+    """A ``UserWarning`` where no real slave (path) comes within ``reach`` of the box of
+    the real segments: the sizes measured then hold no contact.
+
+    Every later step that does come into contact overflows (``state.overflow``) and
+    misses contacts: a body allocated at its drop height falls through the floor, and
+    even its gradients look right. Only the box is tested, so the warning is never
+    false: a slave inside the box but out of reach passes unwarned (the cull keeps its
+    block, so the sizes hold at least that block).
+    """
+    nodes, segments = np.asarray(surface.nodes), np.asarray(surface.segments)
+    real = np.ones(len(segments), bool) if surface.mask is None else np.array(surface.mask, bool)
+    real &= np.all((segments >= 0) & (segments < len(nodes)), axis=-1)
+    ends = nodes[segments[real]].reshape(-1, 2)
+    ends = ends[np.all(np.isfinite(ends), axis=-1)]
+    points = [np.asarray(x)] + ([] if x_prev is None else [np.asarray(x_prev)])
+    rows = np.ones(len(points[0]), bool) if mask is None else np.array(mask, bool)
+    for values in points:
+        rows &= np.all(np.isfinite(values), axis=-1)
+    if not (rows.any() and len(ends)):
+        return
+    low, high = np.min(points, axis=0)[rows], np.max(points, axis=0)[rows]
+    margin = float(reach or 0)
+    near = np.all((high >= ends.min(axis=0) - margin) & (low <= ends.max(axis=0) + margin), -1)
+    if near.any():
+        return
+    within = f"within the reach {margin:g} of " if reach else ""
+    warnings.warn(
+        f"Search.allocate: no slave {'path ' if x_prev is not None else ''}comes {within}the "
+        "master's box, so the sizes it measured hold no contact: a later step that comes "
+        "into contact overflows (state.overflow) and misses contacts. Allocate at a "
+        "configuration in contact (or pass at_least= a state allocated there), or reallocate "
+        "on overflow (jaxcontact.resumable_scan)",
+        UserWarning,
+        stacklevel=3,
+    )
+
+
 def _check_state_type(state):
     """A ``ValueError`` unless ``state`` is a ``SearchState``."""
     if not isinstance(state, SearchState):
@@ -718,7 +758,9 @@ def _check_unbatched(state: SearchState, method: str):
     if np.ndim(state.overflow) != 0:
         raise ValueError(
             f"state was allocated for a batch of {np.shape(state.overflow)[0]} scenes: "
-            f"map {method} over it with jax.vmap"
+            f"map {method} over it with jax.vmap, over the state's axis 0 too: "
+            f"jax.vmap(search.{method}, in_axes=(0, 0, None)) for a batch of x against one "
+            "surface"
         )
 
 

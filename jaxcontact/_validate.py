@@ -48,7 +48,11 @@ def validate(x, surface: Surface, *, radius=None, mask=None, x_prev=None) -> Non
 
     A real segment of zero length is legal (the detectors ignore it, as if
     masked), but it is usually a meshing slip: it gives a ``UserWarning``
-    naming its rows rather than an error.
+    naming its rows rather than an error. So do two inputs that are legal
+    but give wrong answers without a word (``_clockwise_loops``,
+    ``_rounding_against_radius``): a closed loop of real segments listed
+    clockwise, whose normals point into it, and float32 coordinates so far
+    from the origin that their rounding is not small against ``radius``.
 
     Args:
       x: f[N, 2] slave coordinates.
@@ -118,3 +122,78 @@ def validate(x, surface: Surface, *, radius=None, mask=None, x_prev=None) -> Non
             UserWarning,
             stacklevel=2,
         )
+    for loop in _clockwise_loops(ends, segments, real_segments & ~zero_length):
+        listed = np.zeros(len(segments), bool)
+        listed[loop] = True
+        warnings.warn(
+            f"surface.segments {_rows(listed)} form a closed loop listed clockwise: its normals "
+            "point into it, so a slave outside it gets a negative gap and one inside a positive "
+            "one. List the loop counter-clockwise (reverse each segment and their order), unless "
+            "the slaves are meant to be inside it (a container)",
+            UserWarning,
+            stacklevel=2,
+        )
+    if radius is not None:
+        used = [np.asarray(x)[real], ends[real_segments].reshape(-1, 2)]
+        message = _rounding_against_radius(np.concatenate(used), float(radius))
+        if message:
+            warnings.warn(message, UserWarning, stacklevel=2)
+
+
+# ``validate`` warns where the coordinates' rounding exceeds this share of the radius.
+ROUNDING_SHARE = 0.01
+
+
+def _rounding_against_radius(points: np.ndarray, radius: float) -> str | None:
+    """A warning's text where the spacing of ``points``' numbers (eps |x|, twice their
+    rounding) is over ``ROUNDING_SHARE`` of ``radius``, else None.
+
+    The detectors measure from the nearer end of a segment, so they add only a few ulps of
+    the local lengths; what they cannot undo is the rounding of the inputs themselves, eps
+    times the coordinates' magnitude. In float32 at 10^4 from the origin that is 1.2e-3,
+    10 % of a radius of 0.012: gaps near the radius are that far off, and contacts appear
+    and vanish with it.
+    """
+    if points.size == 0 or not np.issubdtype(points.dtype, np.floating):
+        return None
+    largest = float(np.max(np.abs(points)))
+    rounding = float(np.finfo(points.dtype).eps) * largest
+    if rounding <= ROUNDING_SHARE * radius:
+        return None
+    return (
+        f"coordinates reach |x| = {largest:.3g}, where {points.dtype} numbers lie up to "
+        f"{rounding:.2g} apart, {100 * rounding / radius:.2g} % of the radius {radius:.3g}: gaps "
+        "near the radius are that far off and contacts there may flip. Subtract a local "
+        "origin (the tool tip, say) from x and surface.nodes before searching, or use float64"
+    )
+
+
+def _clockwise_loops(ends: np.ndarray, segments: np.ndarray, real: np.ndarray) -> list:
+    """The closed loops of ``real`` segments whose signed area is negative (clockwise),
+    each as its segment indices.
+
+    A segment is followed by the real segment that starts at its end node (the lowest
+    index, as the vertex tie rule follows it: ``outline.vertex_neighbours``); a loop is a
+    chain that comes back to where it started. The outward normal is ``(t_y, -t_x)``,
+    to the right of the direction of travel, which is outside a counter-clockwise loop.
+    """
+    following = {}
+    for k in np.flatnonzero(real)[::-1]:
+        following[int(segments[k, 0])] = int(k)
+    seen, loops = set(), []
+    for first in np.flatnonzero(real):
+        path, at, k = [], {}, int(first)
+        while k >= 0 and k not in seen and k not in at:
+            at[k] = len(path)
+            path.append(k)
+            k = following.get(int(segments[k, 1]), -1)
+        seen.update(path)
+        if k >= 0 and k in at:
+            loop = np.asarray(path[at[k] :])
+            start, end = ends[loop, 0], ends[loop, 1]
+            # The shoelace formula, relative to one vertex so far from the origin stays exact.
+            start, end = start - start[0], end - start[0]
+            area = np.sum(start[:, 0] * end[:, 1] - end[:, 0] * start[:, 1]) / 2
+            if area < 0:
+                loops.append(loop)
+    return loops

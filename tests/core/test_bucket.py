@@ -407,7 +407,8 @@ def test_candidates_reused_over_steps_equal_a_fresh_search_until_expired(name):
 def test_expired_candidates_can_miss_contacts_which_is_why_the_check_exists():
     scene = cutting_scene(3_000, 20.3)
     search = Search(radius=0.1, skin=0.05, method="binned", slack=2.0)
-    state = search.allocate(scene.x, scene.surface)
+    with pytest.warns(UserWarning, match="hold no contact"):  # the tool is clear
+        state = search.allocate(scene.x, scene.surface)
     moved = scene.surface._replace(nodes=scene.surface.nodes.at[:, 0].add(-1.5))
     assert bool(jit_expired(state.candidates, scene.x, moved, None, search.skin))
     stale = sized_bucket_sort(

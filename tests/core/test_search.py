@@ -50,7 +50,8 @@ def test_closest_equals_all_to_all_at_every_step_and_outgrown_sizes_say_so(metho
     # Sizes measured with the tool clear of the workpiece and no slack: the
     # tool moving in outgrows them.
     search = Search(radius=RADIUS, skin=skin, method=method, slack=1.0)
-    state = search.allocate(xs[0], surface_at(nodes[0], segments))
+    with pytest.warns(UserWarning, match="hold no contact"):
+        state = search.allocate(xs[0], surface_at(nodes[0], segments))
     assert state.sizes.use_cells == (method == "binned")
     step = jax.jit(search.closest)
     overflows = 0
@@ -297,7 +298,9 @@ def test_a_state_is_refused_by_a_search_or_shapes_it_was_not_allocated_for():
     with pytest.raises(ValueError, match="surface.nodes must have the allocated shape"):
         search.closest(state, scene.x, more._replace(segments=scene.surface.segments))
     batch = search.allocate(jnp.stack([scene.x, scene.x]), scene.surface)
-    with pytest.raises(ValueError, match="batch of 2 scenes: map closest over it with jax.vmap"):
+    with pytest.raises(
+        ValueError, match="batch of 2 scenes: map closest over it with jax.vmap, over the state's"
+    ):
         search.closest(batch, scene.x, scene.surface)
     plain = Search(radius=RADIUS)  # no candidates kept: the batch is seen all the same
     with pytest.raises(ValueError, match="batch of 2 scenes: map closest over it"):
@@ -344,7 +347,8 @@ def test_a_radius_past_the_search_bound_says_so_unless_no_row_is_real():
     xs, nodes, segments = trajectory(jnp.float32, steps=1)
     x, surface = xs[0], surface_at(nodes[0], segments)
     search = Search(radius=RADIUS)
-    state = search.allocate(x, surface)
+    with pytest.warns(UserWarning, match="hold no contact"):  # the tool is clear
+        state = search.allocate(x, surface)
 
     def closest(state, x, radius, mask):
         return search.closest(state, x, surface, radius=radius, mask=mask)
@@ -362,3 +366,35 @@ def test_a_radius_past_the_search_bound_says_so_unless_no_row_is_real():
     ]:
         contact, _ = step(state, x, jnp.asarray(radius, x.dtype), mask)
         assert bool(contact.overflow) == flagged, (radius, flagged)
+
+
+def _floor_and_chain(height: float):
+    """A wavy floor of 40 segments and a chain of 200 slaves at ``height`` above it."""
+    along = np.linspace(-1.0, 1.0, 41)
+    nodes = np.stack([along, 0.05 * np.sin(5 * along)], -1).astype(FLOAT)
+    floor = Surface(jnp.asarray(nodes), jnp.stack([jnp.arange(40), jnp.arange(1, 41)], -1))
+    chain = np.stack([np.linspace(-0.9, 0.9, 200), np.full(200, height)], -1).astype(FLOAT)
+    return floor, jnp.asarray(chain)
+
+
+def test_allocate_warns_when_no_slave_is_near_the_master():
+    """Sizes measured before contact hold none: ``allocate`` says so, for either query,
+    and is silent once a slave is within reach, with ``at_least``, and exhaustively."""
+    floor, high = _floor_and_chain(2.0)
+    _, low = _floor_and_chain(0.06)
+    search = Search(radius=RADIUS)
+    with pytest.warns(UserWarning, match="no slave comes within the reach 0.1 of the master's"):
+        far = search.allocate(high, floor)
+    with pytest.warns(UserWarning, match="no slave path comes"):
+        Search(radius=None).allocate(high, floor, x_prev=high + 0.1)
+    # What it warns of: once the chain reaches the floor the state overflows, and
+    # contacts are missing.
+    fallen, far = search.closest(far, low, floor)
+    assert bool(far.overflow)
+    assert int(fallen.found.sum()) < int(all_to_all(low, floor, radius=RADIUS).found.sum())
+    near = search.allocate(low, floor)  # filterwarnings = error: any warning fails here
+    search.allocate(high, floor, at_least=near)
+    Search(radius=RADIUS, method="exhaustive").allocate(high, floor)
+    masked = jnp.zeros(200, bool).at[0].set(True)
+    with pytest.warns(UserWarning, match="no slave comes"):
+        search.allocate(low.at[0].set(high[0]), floor, mask=masked)

@@ -84,3 +84,53 @@ def test_zero_length_segment_warns_naming_it():
 def test_traced_arguments_are_refused():
     with pytest.raises(ValueError, match="validate needs concrete arrays; x is traced"):
         jax.jit(lambda x: validate(x, SURFACE))(X)
+
+
+SQUARE = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+AROUND = np.array([[0, 1], [1, 2], [2, 3], [3, 0]])  # counter-clockwise
+
+
+def test_a_closed_loop_listed_clockwise_warns_naming_its_segments():
+    outside = np.array([[0.5, -0.05]])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        validate(outside, Surface(SQUARE, AROUND), radius=0.1)
+        validate(outside, Surface(SQUARE, AROUND[::-1, ::-1][:3]), radius=0.1)  # open: no loop
+    # Reversed (clockwise), with a masked segment and a counter-clockwise loop beside it.
+    nodes = np.concatenate([SQUARE, SQUARE + 3.0])
+    segments = np.concatenate([[[-1, -1]], AROUND[::-1, ::-1], AROUND + 4])
+    mask = np.ones(len(segments), bool)
+    mask[0] = False
+    surface = Surface(nodes, segments, mask=mask)
+    with pytest.warns(
+        UserWarning, match=re.escape("rows [1, 2, 3, 4] form a closed loop listed clockwise")
+    ):
+        validate(outside, surface, radius=0.1)
+    # What it warns of: the gap of a slave outside the square comes out negative.
+    assert (
+        float(
+            all_to_all(jnp.asarray(outside), Surface(SQUARE, AROUND[::-1, ::-1]), radius=0.1).gap[0]
+        )
+        < 0
+    )
+
+
+def test_float32_far_from_the_origin_warns_against_the_radius():
+    shifted = Surface(SQUARE + 1e4, AROUND)
+    x = np.array([[1e4 + 0.5, 1e4 - 0.005]])
+    with pytest.warns(
+        UserWarning, match=r"float32 numbers lie up to 0.0012 apart, 12 % of the radius 0.01"
+    ):
+        validate(
+            x.astype(np.float32),
+            shifted._replace(nodes=shifted.nodes.astype(np.float32)),
+            radius=0.01,
+        )
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        validate(
+            x.astype(np.float32) - 1e4, Surface(SQUARE.astype(np.float32), AROUND), radius=0.01
+        )
+        validate(x.astype(np.float32), shifted._replace(nodes=shifted.nodes.astype(np.float32)))
+        if jax.config.jax_enable_x64:
+            validate(x, shifted, radius=0.01)
