@@ -343,7 +343,8 @@ class Search:
                 )
                 path_sizes = self._path_room(path_sizes, x_prev, x, pooled, mask, at_least, pairing)
         if self.method != "exhaustive" and at_least is None:
-            _warn_if_none_near(x, pooled, mask, self.radius and self._reach, x_prev)
+            reach = None if self.radius is None else self._reach
+            _warn_if_none_near(x, pooled, mask, reach, x_prev)
         state = self._state(sizes, path_sizes, candidates, overflow, (), x)
         return _kept_history(state, at_least)
 
@@ -707,8 +708,9 @@ def _kept_history(state: SearchState, at_least) -> SearchState:
 
 
 def _warn_if_none_near(x, surface: Surface, mask, reach, x_prev) -> None:
-    """A ``UserWarning`` where no real slave (path) comes within ``reach`` of the box of
-    the real segments: the sizes measured then hold no contact.
+    """A ``UserWarning`` where no real slave (path) comes within ``reach`` (``radius +
+    skin``; None for paths only: 0) of the box of the real segments: the sizes measured
+    then hold no contact.
 
     Every later step that does come into contact overflows (``state.overflow``) and
     misses contacts: a body allocated at its drop height falls through the floor, and
@@ -728,11 +730,11 @@ def _warn_if_none_near(x, surface: Surface, mask, reach, x_prev) -> None:
     if not (rows.any() and len(ends)):
         return
     low, high = np.min(points, axis=0)[rows], np.max(points, axis=0)[rows]
-    margin = float(reach or 0)
+    margin = 0.0 if reach is None else float(reach)
     near = np.all((high >= ends.min(axis=0) - margin) & (low <= ends.max(axis=0) + margin), -1)
     if near.any():
         return
-    within = f"within the reach {margin:g} of " if reach else ""
+    within = "" if reach is None else f"within the reach {margin:g} of "
     warnings.warn(
         f"Search.allocate: no slave {'path ' if x_prev is not None else ''}comes {within}the "
         "master's box, so the sizes it measured hold no contact: a later step that comes "

@@ -133,7 +133,7 @@ def validate(x, surface: Surface, *, radius=None, mask=None, x_prev=None) -> Non
             UserWarning,
             stacklevel=2,
         )
-    if radius is not None:
+    if radius is not None and float(radius) > 0:
         used = [np.asarray(x)[real], ends[real_segments].reshape(-1, 2)]
         message = _rounding_against_radius(np.concatenate(used), float(radius))
         if message:

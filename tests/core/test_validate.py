@@ -132,5 +132,11 @@ def test_float32_far_from_the_origin_warns_against_the_radius():
             x.astype(np.float32) - 1e4, Surface(SQUARE.astype(np.float32), AROUND), radius=0.01
         )
         validate(x.astype(np.float32), shifted._replace(nodes=shifted.nodes.astype(np.float32)))
+        # A radius of 0 (touching only) has no share to compare with.
+        validate(
+            x.astype(np.float32),
+            shifted._replace(nodes=shifted.nodes.astype(np.float32)),
+            radius=0.0,
+        )
         if jax.config.jax_enable_x64:
             validate(x, shifted, radius=0.01)
