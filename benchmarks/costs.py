@@ -42,7 +42,7 @@ Coulomb), called with the carry it returned last on positions that alternate bet
 frames ``x0, x1, x0, ...``, so every step has slip to compute. Five variants: **plain**
 (``Search.closest`` + ``forces.penalty``), **track** (``Search(track=True)`` + penalty),
 **track + Coulomb** (``forces.coulomb``, the ``Friction`` carried), **smooth normals**
-(``Search(normals="smooth")`` + penalty), **all** (track, smooth, Coulomb). Scenes, each
+(``Search(normals=Smooth())`` + penalty), **all** (track, smooth, Coulomb). Scenes, each
 in the dense and the compact form: the cutting scene at 10^4 and 81,939 nodes, the frames
 the grid and the grid moved ``+0.01`` in x; the curling chip at 10^4 nodes with the
 self-contact rule, the frames the chip and the chip moved ``0.75 h`` in x. States

@@ -12,8 +12,13 @@ coordinator and its own id, or ``--auto`` where JAX detects the cluster
     python examples/multihost.py --auto                           # under SLURM etc.
 
 Every process builds the same scene (as a simulation would from the same
-input), the detection runs once over the global mesh, and process 0 prints
-what was found and the force on the tool (a ``psum`` across all devices).
+input); the slaves, padded with masked rows to a multiple of the device
+count, are split over the global mesh, and each device searches its own rows
+against the whole (replicated) tool under ``jax.shard_map``, both
+exhaustively (``all_to_all``) and by bucket sort (a ``Search`` whose sizes are
+measured once on the host for the batch of the devices' rows). Process 0
+prints what was found and the force on the tool: sums over every device
+(``psum``; ``forces.penalty(..., axis_name=)`` for the tool's reaction).
 """
 
 from __future__ import annotations
@@ -49,27 +54,72 @@ def main() -> None:
         )
 
     import jax.numpy as jnp
+    import numpy as np
+    from jax.sharding import NamedSharding
+    from jax.sharding import PartitionSpec as P
 
-    from jaxcontact import all_to_all, bucket_sort, sharded
+    from jaxcontact import Search, all_to_all
     from jaxcontact.forces import penalty
     from jaxcontact.scenes import cutting_scene
 
     devices = jax.devices()
     mesh = jax.make_mesh((len(devices),), ("slaves",))
     scene = cutting_scene(args.nodes, x_tip=18.0)
-    # The bucket sort measures its sizes for one device's rows from the
-    # concrete data on the host, so it is called plainly, outside jit.
-    binned = sharded(bucket_sort, mesh)(scene.x, scene.surface, radius=scene.radius)
-    dense = jax.jit(sharded(all_to_all, mesh))(scene.x, scene.surface, radius=scene.radius)
+    radius, surface = scene.radius, scene.surface
+    # shard_map splits evenly: masked rows pad the slaves to a multiple of the devices.
+    num_rows = scene.x.shape[0]
+    x = np.pad(np.asarray(scene.x), ((0, -num_rows % len(devices)), (0, 0)))
+    mask = np.arange(x.shape[0]) < num_rows
 
-    @jax.jit
-    def summary(binned, dense):
-        # The sum over devices is a collective.
-        on_tool = -jnp.sum(penalty(binned, scene.surface, 1e4).on_slaves, axis=0)
-        same = jnp.all((dense.segment == binned.segment) | ~dense.found)
-        return jnp.sum(binned.found), jnp.sum(binned.active), on_tool, same, binned.overflow
+    # The bucket sort's sizes: measured once on the host, from the concrete
+    # data, for the batch of the devices' rows (the largest of their sizes);
+    # each device starts its state from them inside the program.
+    search = Search(radius=radius)
+    batch = (len(devices), -1)
+    sizes = search.allocate(x.reshape(*batch, 2), surface, mask=mask.reshape(batch)).sizes
 
-    found, active, on_tool, same, overflow = summary(binned, dense)
+    def on_device(x, mask, surface):
+        """One device's rows against the whole tool; every output summed over the devices."""
+        dense = all_to_all(x, surface, radius=radius, mask=mask)
+        state = search.init(x, surface, sizes=sizes, mask=mask)
+        binned, _ = search.closest(state, x, surface, mask=mask)
+        on_tool = penalty(binned, surface, 1e4, axis_name="slaves").on_master.sum(0)
+
+        def total(values):
+            return jax.lax.psum(jnp.sum(values.astype(jnp.int32)), "slaves")
+
+        differ = (dense.segment != binned.segment) & dense.found
+        return (
+            total(binned.found),
+            total(binned.active),
+            on_tool,
+            total(differ) == 0,
+            total(binned.overflow) > 0,  # one device's overflow is the run's
+        )
+
+    summary = jax.jit(
+        jax.shard_map(
+            on_device,
+            mesh=mesh,
+            in_specs=(P("slaves"), P("slaves"), P()),
+            out_specs=P(),
+            # The detectors' conds return constants where they skip work,
+            # which shard_map's check of varying axes refuses.
+            check_vma=False,
+        )
+    )
+
+    def placed(values, spec):
+        """``values`` (the same in every process) as a global array over the mesh."""
+        values = np.asarray(values)
+        sharding = NamedSharding(mesh, spec)
+        return jax.make_array_from_callback(values.shape, sharding, lambda index: values[index])
+
+    found, active, on_tool, same, overflow = summary(
+        placed(x, P("slaves")),
+        placed(mask, P("slaves")),
+        jax.tree.map(lambda values: placed(values, P()), surface),
+    )
     if jax.process_index() == 0:
         print(
             f"{jax.process_count()} process(es), {len(devices)} device(s): "

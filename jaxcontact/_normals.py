@@ -1,7 +1,7 @@
 """Smooth normals on a faceted outline, sharp corners kept.
 
 A faceted outline's normal jumps at every vertex, so a slave sliding over a
-discretised curve feels a force that turns in steps. ``normals="smooth"``
+discretised curve feels a force that turns in steps. ``normals=Smooth(corner)``
 replaces the facet's normal by one interpolated along the segment between
 normals at its two end nodes: ``n(xi) = normalize((1 - xi) m_a + xi m_b)``
 (Phong-style normal interpolation, as in the smoothed node-to-segment
@@ -18,9 +18,9 @@ closest point stays the one on the straight segment that the search found,
 so nothing is searched again and the point, ``xi``, the segment and the
 vertex are the faceted ones; only the direction changes. The gap is
 measured along the normal used, ``(x - point) . n(xi)`` (at a vertex kept
-sharp, the flat gap ``+-|x - point|``, so ``corner=0`` is the flat search): continuous across a
-smoothed vertex (in a convex vertex's region the point is the vertex and the
-normal is the nodal one on both sides) and of the faceted gap's sign
+sharp, the flat gap ``+-|x - point|``, so ``Smooth(corner=0)`` is the flat
+search): continuous across a smoothed vertex (in a convex vertex's region the
+point is the vertex and the normal is the nodal one on both sides) and of the faceted gap's sign
 wherever the two normals are less than 90 degrees apart. What it leaves out:
 the geometry is still the facets', so the gap is not the distance to a
 smooth curve (the difference is the interpolation error, of order the
@@ -30,6 +30,7 @@ the exact gradient of a penalty energy of that gap.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import jax
@@ -40,24 +41,59 @@ from jaxcontact._pipeline.outline import vertex_neighbours
 from jaxcontact._pipeline.rows import on_rows
 from jaxcontact._types import Array, ContactList, Surface
 
-NORMALS = ("flat", "smooth")
 # The default corner angle: an outline that turns by less than this at a node
 # is taken as the faceting of a smooth curve (a circle of 8 or more segments);
 # by this or more it is a corner.
 CORNER_DEGREES = 45.0
 
 
-def check_normals(normals, corner) -> float:
-    """The corner angle in degrees, checked with the ``normals`` choice."""
-    if normals not in NORMALS:
-        raise ValueError(f"normals must be one of {NORMALS}; got {normals!r}")
-    try:
-        corner = float(corner)
-    except (TypeError, ValueError):
-        raise ValueError(f"corner must be an angle in degrees; got {corner!r}") from None
-    if not (0 <= corner <= 180):
-        raise ValueError(f"corner must lie in [0, 180] degrees; got {corner}")
-    return corner
+@dataclasses.dataclass(frozen=True)
+class Smooth:
+    """Smooth normals: interpolated along each segment between nodal normals.
+
+    Passed as ``normals=`` to ``all_to_all``, ``bucket_sort`` and ``Search``
+    (``None``, the default, is each segment's own flat normal). The nodal
+    normal is the bisector of the two segments' normals where the outline
+    turns by less than ``corner`` degrees, and each segment's own normal at a
+    sharper corner; the gap is measured along the interpolated normal (the
+    repository's docs/contract.md, "Smooth normals"). The segment, ``xi`` and
+    point are the flat search's.
+
+    Attributes:
+      corner: the corner angle in degrees, in [0, 180]; ``0`` keeps every
+        vertex sharp (the flat search's gaps).
+
+    Example:
+      >>> import jaxcontact
+      >>> jaxcontact.Smooth(corner=30)
+      Smooth(corner=30.0)
+    """
+
+    corner: float = CORNER_DEGREES
+
+    def __post_init__(self):
+        try:
+            corner = float(self.corner)
+        except (TypeError, ValueError):
+            raise ValueError(
+                f"Smooth.corner must be an angle in degrees; got {self.corner!r}"
+            ) from None
+        if not (0 <= corner <= 180):
+            raise ValueError(f"Smooth.corner must lie in [0, 180] degrees; got {corner}")
+        # A plain float: the search that holds it is hashed as a static argument.
+        object.__setattr__(self, "corner", corner)
+
+
+def check_normals(normals) -> Smooth | None:
+    """``normals`` checked: ``None`` (flat) or a ``Smooth``."""
+    if normals is None or isinstance(normals, Smooth):
+        return normals
+    if isinstance(normals, str):
+        raise TypeError(
+            f"normals={normals!r} was removed in 2.0: pass normals=None for flat normals or "
+            "normals=jaxcontact.Smooth(corner=45.0) for smooth ones (corner= moved into Smooth)"
+        )
+    raise ValueError(f"normals must be None or a jaxcontact.Smooth; got {type(normals).__name__}")
 
 
 def _unit(vectors: Array) -> Array:

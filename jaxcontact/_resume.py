@@ -30,6 +30,45 @@ def _overflowed(carry) -> bool:
     return any(bool(np.any(np.asarray(state.overflow))) for state in _states(carry))
 
 
+def check_overflow(carry) -> None:
+    """Raises when a search state in ``carry`` overflowed: a run's one check, on the host.
+
+    A state's ``overflow`` stays set once any step outgrew its sizes, so one
+    call after a ``lax.scan`` (or a Python loop) covers every step. An
+    overflowed step may have missed contacts, and every step after it built
+    on that: the run's results are not to be used.
+
+    Args:
+      carry: a ``SearchState``, or any pytree holding them (a scan's carry).
+
+    Raises:
+      RuntimeError: naming how many states overflowed and what to do.
+      ValueError: when ``carry`` holds no ``SearchState``.
+
+    Example:
+      >>> import jax.numpy as jnp
+      >>> import jaxcontact
+      >>> floor = jaxcontact.Surface(jnp.array([[1.0, 0.0], [0.0, 0.0]]), jnp.array([[0, 1]]))
+      >>> search = jaxcontact.Search(radius=0.5)
+      >>> state = search.allocate(jnp.array([[0.5, 0.25]]), floor)
+      >>> jaxcontact.check_overflow((state, 1.0))  # nothing outgrown: returns None
+    """
+    states = _states(carry)
+    if not states:
+        raise ValueError("carry holds no jaxcontact SearchState: nothing can overflow")
+    overflowed = sum(bool(np.any(np.asarray(state.overflow))) for state in states)
+    if overflowed:
+        raise RuntimeError(
+            f"{overflowed} of {len(states)} search state(s) overflowed during this run: a "
+            "step outgrew the sizes allocate measured, so contacts may have been missed and "
+            "the results from that step on are not to be used. Allocate again at a "
+            "configuration in contact (search.allocate(x, surface, at_least=state), with a "
+            "larger Search(slack=...) for a scene that changes a lot) and rerun, or run the "
+            "loop with jaxcontact.resumable_scan(step, carry, xs, chunk=..., grow=...), which "
+            "allocates again and reruns only the chunk that overflowed"
+        )
+
+
 def resumable_scan(step, carry, xs=None, *, chunk: int, grow, length: int | None = None):
     """``jax.lax.scan(step, carry, xs)`` in chunks; a chunk whose search
     states overflowed is run again from its start, with larger sizes.

@@ -22,7 +22,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxcontact import _normals, _track
+from jaxcontact import _normals, _removed, _track
 from jaxcontact._pipeline import candidates as _candidates
 from jaxcontact._pipeline import driver
 from jaxcontact._pipeline import inputs as _inputs
@@ -48,17 +48,11 @@ from jaxcontact._types import (
 )
 
 METHODS = ("auto", "binned", "unbinned", "exhaustive")
-# Method names replaced, and their replacements.
-REPLACED_METHODS = {"dense": "unbinned"}
-# What ``closest`` returns: the slip too with ``track=True``.
-Closest = (
-    tuple[Contact | ContactList, "SearchState"] | tuple[Contact | ContactList, "SearchState", Slip]
-)
 
 
 @functools.partial(
     jax.tree_util.register_dataclass,
-    data_fields=["candidates", "overflow", "rebuilds", "last_rebuild", "history"],
+    data_fields=["candidates", "overflow", "rebuilds", "last_rebuild", "history", "slip"],
     meta_fields=["sizes", "path_sizes", "reach"],
 )
 @dataclasses.dataclass(frozen=True)
@@ -90,6 +84,8 @@ class SearchState:
         a search that reaches farther refuses the state.
       history: last step's contact of every slave (the N-row form, for the
         compact form too) for ``Search(track=True)``; ``None`` otherwise.
+      slip: the ``Slip`` of every slave over the last ``closest`` step (zeros
+        before the first) for ``Search(track=True)``; ``None`` otherwise.
     """
 
     sizes: Sizes | None
@@ -100,6 +96,7 @@ class SearchState:
     last_rebuild: Array
     reach: float | None = None
     history: _track.History | None = None
+    slip: Slip | None = None
 
     def forget(self, rows) -> SearchState:
         """This state with the slip history of ``rows`` (bool[N]) forgotten.
@@ -161,12 +158,11 @@ class Search:
         reads every row to check the rule, carries the candidates in the
         state, and searches the longer lists of the wider reach; a step that
         finds them again costs more than one without a skin. Whether it pays
-        depends on the scene: the repository's benchmarks/archive/search_step.py
+        depends on the scene: tag benchmarks-archive-1.2:benchmarks/archive/search_step.py
         (one step) and benchmarks/simulations.py (a ``lax.scan``) measure it.
       method: ``"binned"``: bucket sort with the segments binned in cells,
         each kept slave against its cell's segments; ``"unbinned"``: bucket
-        sort with each kept slave against every segment (``"dense"`` still
-        selects it, with a ``DeprecationWarning``); ``"auto"``: binned above
+        sort with each kept slave against every segment; ``"auto"``: binned above
         ``cells_above`` segments, unbinned at or below;
         ``"exhaustive"``: every slave against every segment (``all_to_all``,
         ``swept``), with no sizes and no overflow.
@@ -186,18 +182,14 @@ class Search:
         ``CrossingList`` whose capacity ``allocate(..., x_prev=)`` measures
         (the paths crossing then times ``slack``). Not for the
         ``"exhaustive"`` method.
-      self_contact: replaced by ``Pairs(self_contact=True)`` passed to
-        each call (``pairs=``); ``True`` still works, with a
-        ``DeprecationWarning``, and applies to every call.
       track: carry each slave's contact from step to step in the state;
-        ``closest`` then returns ``(contact, state, slip)`` with the
-        ``Slip`` since the last step (the repository's docs/contract.md,
+        after each ``closest``, ``state.slip`` is the ``Slip`` of every
+        slave since the last step (the repository's docs/contract.md,
         "Slip history").
-      normals: ``"flat"``, each segment's own normal, or ``"smooth"``:
+      normals: ``None``, each segment's own normal, or ``Smooth(corner)``:
         normals interpolated along each segment between nodal normals,
         continuous across a vertex where the outline turns by less than
         ``corner`` degrees (``all_to_all``'s ``normals``).
-      corner: the corner angle of smooth normals, in degrees.
 
     A radius per slave: ``radius`` is the static bound the sizes are built
     for; ``closest(..., radius=r)`` takes a traced scalar or f[N] at or
@@ -213,10 +205,8 @@ class Search:
     cells_above: int = CELLS_ABOVE
     chunk_rows: int = CHUNK_ROWS
     compact: bool = False
-    self_contact: bool = False
     track: bool = False
-    normals: str = "flat"
-    corner: float = _normals.CORNER_DEGREES
+    normals: _normals.Smooth | None = None
 
     def __post_init__(self):
         # Plain Python numbers: the search is hashed as a static argument.
@@ -235,14 +225,11 @@ class Search:
                 raise ValueError(f"radius must be finite and >= 0, or None; got {self.radius}")
         if not (math.isfinite(self.skin) and self.skin >= 0):
             raise ValueError(f"skin must be finite and >= 0; got {self.skin}")
-        if self.method in REPLACED_METHODS:
-            new = REPLACED_METHODS[self.method]
-            warnings.warn(
-                f'Search(method="{self.method}") is replaced by method="{new}"',
-                DeprecationWarning,
-                stacklevel=3,
+        removed = _removed.REMOVED.get(f'jaxcontact.Search(method="{self.method}")')
+        if removed is not None:
+            raise ValueError(
+                f'Search(method="{self.method}") was removed in {removed[2]}: {removed[0]}'
             )
-            object.__setattr__(self, "method", new)
         if self.method not in METHODS:
             raise ValueError(f"method must be one of {METHODS}; got {self.method!r}")
         if not (math.isfinite(self.slack) and self.slack >= 1):
@@ -252,21 +239,14 @@ class Search:
                 raise ValueError(f"{name} must be an int >= 1; got {getattr(self, name)!r}")
         if self.cells_above < 0:
             raise ValueError(f"cells_above must be an int >= 0; got {self.cells_above}")
-        object.__setattr__(self, "corner", _normals.check_normals(self.normals, self.corner))
-        for name in ("compact", "self_contact", "track"):
+        _normals.check_normals(self.normals)
+        for name in ("compact", "track"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"{name} must be a bool; got {getattr(self, name)!r}")
         if self.compact and self.method == "exhaustive":
             raise ValueError(
                 'compact=True needs a bucket method ("auto", "binned", "unbinned"); '
                 'the "exhaustive" method returns the N-row Contact'
-            )
-        if self.self_contact:
-            warnings.warn(
-                "Search(self_contact=True) is replaced by pairs=jaxcontact.Pairs("
-                "self_contact=True, ...) passed to allocate, closest and swept",
-                DeprecationWarning,
-                stacklevel=3,
             )
 
     # -- host ---------------------------------------------------------------
@@ -281,7 +261,6 @@ class Search:
         at_least: SearchState | Sizes | None = None,
         pool: Array | None = None,
         pairs: Pairs | None = None,
-        **replaced,
     ) -> SearchState:
         """Measures the sizes from concrete data on the host and finds the candidates.
 
@@ -307,22 +286,33 @@ class Search:
           pairs: the pair rule (``Pairs``), as for ``closest``: the compact
             form's capacities count the contacts (and crossings) the rule
             lets through. For a batch its arrays are batched as ``mask``.
-          **replaced: ``slave_node``, ``slave_body``: replaced by ``pairs``
-            (they warn).
 
         Returns:
           A ``SearchState``. Its sizes are static: each distinct sizes
           compiles ``closest`` (``swept``) once.
+
+        Warns:
+          UserWarning: when no slave (path) comes within ``radius + skin`` of
+            the box of the master's real segments: the sizes then hold no
+            contact, and a later step that comes into contact overflows.
         """
+        return self._allocate(x, surface, x_prev, mask, at_least, pool, pairs, warn=True)
+
+    def _allocate(
+        self, x, surface, x_prev=None, mask=None, at_least=None, pool=None, pairs=None, *, warn
+    ) -> SearchState:
+        """``allocate``, warning (``warn``) where no slave comes near the master."""
         if self.radius is None and x_prev is None:
             raise ValueError("allocate needs x_prev= for a Search without a radius (paths only)")
         hint = "allocate once outside, or start a state inside with search.init(sizes=...)"
-        pairs = self._replaced(pairs, replaced)
+        pairs = _pairs.EVERY_PAIR if pairs is None else pairs
+        if not isinstance(pairs, Pairs):
+            raise ValueError(f"pairs must be a jaxcontact.Pairs; got {type(pairs).__name__}")
         given = (x, surface, x_prev, mask, pool, pairs)
         _inputs.require_concrete("Search.allocate", given, hint)
         batched = np.ndim(x) == 3
         if batched:
-            return self._allocate_batch(*given, at_least)
+            return self._allocate_batch(*given, at_least, warn)
         x_prev, x, mask = _inputs.check_slaves(x, x_prev, mask)
         surface = _inputs.check_surface(surface, x.dtype)
         pool = _inputs.check_mask("pool", pool, surface.segments.shape[0])
@@ -342,24 +332,17 @@ class Search:
                     path_sizes, at_least, "path_sizes", x, pooled, mask, x_prev=x_prev
                 )
                 path_sizes = self._path_room(path_sizes, x_prev, x, pooled, mask, at_least, pairing)
-        if self.method != "exhaustive" and at_least is None:
+        if warn and self.method != "exhaustive" and at_least is None:
             reach = None if self.radius is None else self._reach
             _warn_if_none_near(x, pooled, mask, reach, x_prev)
         state = self._state(sizes, path_sizes, candidates, overflow, (), x)
         return _kept_history(state, at_least)
 
-    def _replaced(self, pairs, replaced: dict) -> Pairs:
-        """``pairs`` with the replaced keywords folded in (they warn), unchecked."""
-        pairs = _pairs.folded(pairs, replaced, 3, allowed=("slave_node", "slave_body"))
-        if self.self_contact and not pairs.self_contact:
-            pairs = dataclasses.replace(pairs, self_contact=True)
-        return pairs
-
     def _pairing(self, x, surface, mask, pairs: Pairs) -> Pairs:
         """The checked pair rule of one (unbatched) call."""
         return _pairs.check(pairs, x, surface, mask)
 
-    def _allocate_batch(self, x, surface, x_prev, mask, pool, pairs, at_least) -> SearchState:
+    def _allocate_batch(self, x, surface, x_prev, mask, pool, pairs, at_least, warn) -> SearchState:
         # A batch split over explicit mesh axes cannot be mapped over: whole.
         given = (jnp.asarray(x), surface, x_prev, mask, pool, pairs.slave_node, pairs.slave_body)
         x, surface, x_prev, mask, pool, slave_node, slave_body = replicated(given)
@@ -402,6 +385,9 @@ class Search:
                 path_sizes = self._path_room(
                     path_sizes, x_prev, x, pooled, mask, at_least, pairing, axes
                 )
+        if warn and self.method != "exhaustive" and at_least is None:
+            reach = None if self.radius is None else self._reach
+            _warn_if_none_near(x, pooled, mask, reach, x_prev)
         state = self._state(sizes, path_sizes, candidates, overflow, x.shape[:1], x)
         return _kept_history(state, at_least)
 
@@ -435,11 +421,13 @@ class Search:
         return self._state(sizes, path_sizes, candidates, overflow, (), x)
 
     def _state(self, sizes, path_sizes, candidates, overflow, batch, x) -> SearchState:
-        history = None
+        history = slip = None
         if self.track:
             history = _track.empty_history(x.shape[-2], x.dtype, batch)
+            slip = _track.no_slip(x.shape[-2], x.dtype, batch)
         return SearchState(
             history=history,
+            slip=slip,
             sizes=sizes,
             path_sizes=path_sizes,
             candidates=candidates,
@@ -530,12 +518,8 @@ class Search:
         mask: Array | None = None,
         radius=None,
         pairs: Pairs | None = None,
-        **replaced,
-    ) -> Closest:
+    ) -> tuple[Contact | ContactList, SearchState]:
         """The closest master segment of every slave within ``radius``: one step.
-
-        Returns ``(contact, state)``, or ``(contact, state, slip)`` with
-        ``track=True``.
 
         Runs under ``jit``, ``lax.scan``, ``vmap`` and ``grad`` (gradients of
         the gaps and points with respect to ``x`` and ``surface.nodes``, as
@@ -550,24 +534,22 @@ class Search:
             (the default): a slave whose radius exceeds it sets ``overflow``
             (the bucket methods).
           pairs: the pair rule (``Pairs``, ``all_to_all``'s).
-          **replaced: ``slave_node``, ``slave_body``: replaced by ``pairs``
-            (they warn).
 
         Returns:
           ``(contact, state)``. ``contact`` equals ``all_to_all(x, surface,
           radius=radius, mask=mask, ...)`` whenever ``contact.overflow`` is
           False; when it is True, a contact may be missing: allocate again.
           A compact search returns a ``ContactList`` instead, whose
-          ``to_contact(N)`` is that ``Contact``. A search with
-          ``track=True`` returns ``(contact, state, slip)``: the ``Slip`` of
-          every slave since the last step (``jaxcontact.track``).
+          ``to_contact(N)`` is that ``Contact``. With ``track=True`` the
+          new state's ``slip`` is the ``Slip`` of every slave since the last
+          step (``jaxcontact.track``).
         """
         if self.radius is None:
             raise ValueError("closest needs a Search with a radius; this one searches paths only")
         _check_state_type(state)
         radius = self.radius if radius is None else radius
         x, surface, radius, mask = _inputs.check_contact_inputs(x, surface, radius, mask)
-        pairing = self._pairing(x, surface, mask, self._replaced(pairs, replaced))
+        pairing = self._pairing(x, surface, mask, pairs)
         if self.track and state.history is None:
             raise ValueError("state has no slip history: allocate it with this search (track=True)")
         if self.track and state.history.found.shape != x.shape[:1]:
@@ -599,13 +581,13 @@ class Search:
 
     def _finish(self, contact, state: SearchState, x, surface: Surface):
         """Smooth normals and the slip history, where this search asks for them."""
-        if self.normals == "smooth":
-            contact = _normals.smoothed_jit(contact, x, surface, self.corner)
+        if self.normals is not None:
+            contact = _normals.smoothed_jit(contact, x, surface, self.normals.corner)
         if not self.track:
             return contact, state
         history = _track.history_of(contact, x.shape[0])
         slip = _track.track(state.history, contact, surface)
-        return contact, dataclasses.replace(state, history=history), slip
+        return contact, dataclasses.replace(state, history=history, slip=slip)
 
     def _check_state(self, state: SearchState, x, surface: Surface):
         """The state was allocated by a search of this reach, for these shapes."""
@@ -640,7 +622,6 @@ class Search:
         *,
         mask: Array | None = None,
         pairs: Pairs | None = None,
-        **replaced,
     ) -> tuple[Crossing | CrossingList, SearchState]:
         """The first crossing of every slave's path ``x_prev -> x`` with the master.
 
@@ -653,7 +634,7 @@ class Search:
         """
         _check_state_type(state)
         points, surface, _, mask = SWEPT.check((x_prev, x), surface, None, mask)
-        pairing = self._pairing(points[-1], surface, mask, self._replaced(pairs, replaced))
+        pairing = self._pairing(points[-1], surface, mask, pairs)
         if self.method == "exhaustive":
             return driver.exhaustive(SWEPT, points, surface, None, mask, pairing), state
         if state.path_sizes is None:
@@ -709,15 +690,53 @@ def _kept_history(state: SearchState, at_least) -> SearchState:
 
 def _warn_if_none_near(x, surface: Surface, mask, reach, x_prev) -> None:
     """A ``UserWarning`` where no real slave (path) comes within ``reach`` (``radius +
-    skin``; None for paths only: 0) of the box of the real segments: the sizes measured
-    then hold no contact.
+    skin``; None for paths only: 0) of the box of the real segments, in any scene of a
+    batch (``x`` f[B, N, 2]): the sizes measured then hold no contact.
 
     Every later step that does come into contact overflows (``state.overflow``) and
     misses contacts: a body allocated at its drop height falls through the floor, and
     even its gradients look right. Only the box is tested, so the warning is never
     false: a slave inside the box but out of reach passes unwarned (the cull keeps its
-    block, so the sizes hold at least that block).
+    block, so the sizes hold at least that block). A batch's sizes are the largest of its
+    scenes', so one scene near the master is enough.
     """
+    if np.ndim(x) == 3:
+        scenes = range(np.shape(x)[0])
+
+        def scene(values, b):
+            return None if values is None else np.asarray(values)[b]
+
+        shared = np.ndim(surface.nodes) == 2
+        near = any(
+            _near(
+                scene(x, b),
+                surface if shared else jax.tree.map(lambda v, b=b: np.asarray(v)[b], surface),
+                scene(mask, b) if np.ndim(mask) == 2 else mask,
+                reach,
+                scene(x_prev, b),
+            )
+            for b in scenes
+        )
+    else:
+        near = _near(x, surface, mask, reach, x_prev)
+    if near:
+        return
+    margin = 0.0 if reach is None else float(reach)
+    within = "" if reach is None else f"within the reach {margin:g} of "
+    warnings.warn(
+        f"Search.allocate: no slave {'path ' if x_prev is not None else ''}comes {within}the "
+        "master's box, so the sizes it measured hold no contact: a later step that comes "
+        "into contact overflows (state.overflow) and misses contacts. Allocate at a "
+        "configuration in contact (or pass at_least= a state allocated there), or reallocate "
+        "on overflow (jaxcontact.resumable_scan)",
+        UserWarning,
+        stacklevel=4,
+    )
+
+
+def _near(x, surface: Surface, mask, reach, x_prev) -> bool:
+    """Whether a real slave (path) of one scene comes within ``reach`` of the box of the
+    real segments (True where there is nothing to test: no real slave or segment)."""
     nodes, segments = np.asarray(surface.nodes), np.asarray(surface.segments)
     real = np.ones(len(segments), bool) if surface.mask is None else np.array(surface.mask, bool)
     real &= np.all((segments >= 0) & (segments < len(nodes)), axis=-1)
@@ -728,22 +747,11 @@ def _warn_if_none_near(x, surface: Surface, mask, reach, x_prev) -> None:
     for values in points:
         rows &= np.all(np.isfinite(values), axis=-1)
     if not (rows.any() and len(ends)):
-        return
+        return True
     low, high = np.min(points, axis=0)[rows], np.max(points, axis=0)[rows]
     margin = 0.0 if reach is None else float(reach)
     near = np.all((high >= ends.min(axis=0) - margin) & (low <= ends.max(axis=0) + margin), -1)
-    if near.any():
-        return
-    within = "" if reach is None else f"within the reach {margin:g} of "
-    warnings.warn(
-        f"Search.allocate: no slave {'path ' if x_prev is not None else ''}comes {within}the "
-        "master's box, so the sizes it measured hold no contact: a later step that comes "
-        "into contact overflows (state.overflow) and misses contacts. Allocate at a "
-        "configuration in contact (or pass at_least= a state allocated there), or reallocate "
-        "on overflow (jaxcontact.resumable_scan)",
-        UserWarning,
-        stacklevel=3,
-    )
+    return bool(near.any())
 
 
 def _check_state_type(state):

@@ -71,6 +71,12 @@ def empty_history(num_slaves: int, dtype, batch: tuple = ()) -> History:
     )
 
 
+def no_slip(num_slaves: int, dtype, batch: tuple = ()) -> Slip:
+    """The ``Slip`` before any step: zeros, nothing persisted."""
+    shape = batch + (num_slaves,)
+    return Slip(jnp.zeros(shape, dtype), jnp.zeros(shape, bool), jnp.zeros(shape + (2,), dtype))
+
+
 def history_of(contact: Contact | ContactList, num_slaves: int) -> History:
     """The ``History`` a contact leaves (a ``ContactList`` is spread over ``num_slaves`` rows)."""
     if isinstance(contact, ContactList):

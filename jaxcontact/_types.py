@@ -156,7 +156,7 @@ class CrossingList(NamedTuple):
 
 # With this many segments or fewer, each kept slave meets every segment: a
 # running minimum over M broadcast segments beats per-slave candidate gathers
-# (measured: the repository's benchmarks/archive/bucket.py finds the crossover).
+# (measured: tag benchmarks-archive-1.2:benchmarks/archive/bucket.py finds the crossover).
 # ``Search(cells_above=...)``.
 CELLS_ABOVE = 48
 # Kept slaves are searched in chunks of this many rows, fullest lists first.

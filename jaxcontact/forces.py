@@ -57,7 +57,6 @@ penalty lets slaves penetrate by ``f_n / stiffness``.
 from __future__ import annotations
 
 import functools
-import warnings
 from typing import NamedTuple
 
 import jax
@@ -65,6 +64,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxcontact._pipeline.placement import replicated
+from jaxcontact._removed import missing as _missing
 from jaxcontact._track import Slip
 from jaxcontact._types import Array, Contact, ContactList, Surface
 
@@ -95,38 +95,6 @@ class Friction(NamedTuple):
             jnp.zeros((num_slaves,), bool),
             jnp.zeros((num_slaves,), dtype),
         )
-
-
-def contact_forces(
-    contact: Contact, stiffness, *, axis_name: str | None = None
-) -> tuple[Array, Array]:
-    """Penalty forces of a ``Contact`` against a rigid master: on each slave, and their total.
-
-    Replaced by ``penalty`` (it warns): ``penalty(contact, surface,
-    stiffness).on_slaves`` is the first value, minus its sum the second, and
-    ``on_master`` places that reaction on the master's nodes.
-
-    The force on an active slave is ``stiffness * (-gap) * normal`` (it pushes
-    the slave out along the master's outward normal); inactive rows get zero.
-    The master takes the opposite of their sum. Inside ``jax.shard_map`` with
-    the slaves split over ``axis_name``, that sum is a ``psum`` over the
-    devices; under ``jit`` with sharded inputs, XLA inserts the same
-    collective for the plain sum. ``penalty`` gives the reaction node by node.
-
-    Returns:
-      ``(on_slaves f[N, 2], on_master f[2])``.
-    """
-    warnings.warn(
-        "contact_forces is replaced by jaxcontact.forces.penalty(contact, surface, stiffness)",
-        DeprecationWarning,
-        stacklevel=2,
-    )
-    depth = jnp.where(contact.active, -contact.gap, 0)
-    on_slaves = (stiffness * depth)[:, None] * contact.normal
-    on_master = -jnp.sum(on_slaves, axis=0)
-    if axis_name is not None:
-        on_master = jax.lax.psum(on_master, axis_name)
-    return on_slaves, on_master
 
 
 class _Entries(NamedTuple):
@@ -385,3 +353,6 @@ def _coulomb(
         dissipated=spread(dissipated, 0),
     )
     return forces, after
+
+
+__getattr__ = _missing(__name__)

@@ -18,7 +18,7 @@ def test_readme_is_short():
 
 def test_readme_example_prints_what_it_shows():
     text = README.read_text()
-    section = text.split("## Example")[1].split("\n## ")[0]
+    section = text.split("## A first search")[1].split("\n## ")[0]
     example = re.findall(r"```python\n(.*?)```", section, flags=re.S)[0]
     (shown,) = re.findall(r"```text\n(.*?)```", section, flags=re.S)
     out = io.StringIO()

@@ -26,7 +26,7 @@ import numpy as np
 
 from benchmarks.harness.internals import _inputs, _normals, _outline, _track
 from benchmarks.harness.timing import time_interleaved
-from jaxcontact import Contact, ContactList, Pairs, Search, Surface, all_to_all
+from jaxcontact import Contact, ContactList, Pairs, Search, Smooth, Surface, all_to_all
 from jaxcontact.forces import Friction, coulomb, penalty
 from jaxcontact.scenes import curling_chip, cutting_scene, two_blocks
 
@@ -49,13 +49,13 @@ VARIANTS = {  # name -> (Search keywords, forces, what it adds over plain: the f
     "plain: closest + penalty": ({}, "penalty", None),
     "track: closest(track) + penalty": ({"track": True}, "penalty", "slip tracking"),
     "track + Coulomb": ({"track": True}, "coulomb", "tracking + Coulomb"),
-    'smooth normals: closest(normals="smooth") + penalty': (
-        {"normals": "smooth"},
+    "smooth normals: closest(normals=Smooth()) + penalty": (
+        {"normals": Smooth()},
         "penalty",
         "smooth normals",
     ),
     "all: track + smooth + Coulomb": (
-        {"track": True, "normals": "smooth"},
+        {"track": True, "normals": Smooth()},
         "coulomb",
         "tracking + smooth + Coulomb",
     ),
@@ -576,9 +576,8 @@ def make_step(search: Search, forces: str, num_slaves: int):
 
     def step(carry, x, surface, pairing):
         state, friction = carry if forces == "coulomb" else (carry, None)
-        found = search.closest(state, x, surface, **pairing)
-        contact, state = found[:2]
-        slip = found[2] if search.track else None
+        contact, state = search.closest(state, x, surface, **pairing)
+        slip = state.slip  # None without tracking
         if forces == "coulomb":
             pushed, friction = coulomb(
                 contact,

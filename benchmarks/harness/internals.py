@@ -30,7 +30,6 @@ from jaxcontact._pipeline.sizes import largest, measure, measure_batch, with_ent
 from jaxcontact._pipeline.sort import packs, sorted_pairs, stable_order
 from jaxcontact._query.closest import CLOSEST, contact_from_choice
 from jaxcontact._query.swept import SWEPT
-from jaxcontact._shard import _device_sizes, _pad_rows, shard_rows
 from jaxcontact._timing import (
     Timing,
     _elapsed,
@@ -110,12 +109,10 @@ __all__ = [
     "Timing",
     "_bucket",
     "_dense",
-    "_device_sizes",
     "_elapsed",
     "_inputs",
     "_normals",
     "_outline",
-    "_pad_rows",
     "_track",
     "broad_phase",
     "cell_entries",
@@ -139,7 +136,6 @@ __all__ = [
     "search_listed",
     "search_tiles",
     "segment_boxes",
-    "shard_rows",
     "sized_jit",
     "sized_bucket_sort",
     "sized_bucket_swept",

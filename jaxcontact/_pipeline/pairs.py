@@ -42,7 +42,6 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import warnings
 from collections.abc import Callable
 from typing import NamedTuple
 
@@ -239,42 +238,12 @@ def pick(tags, index: Array):
     return jax.tree.map(lambda values: values[index], tags)
 
 
-# The keywords ``Pairs`` replaced; each warns and names it.
-PAIR_KEYWORDS = ("slave_node", "slave_body", "self_contact")
-
-
-def folded(pairs, keywords: dict, stacklevel: int, allowed=PAIR_KEYWORDS) -> Pairs:
-    """``pairs`` (a ``Pairs`` or None) with the replaced keywords folded in,
-    unchecked. Each replaced keyword passed warns, whatever its value; one
-    passed beside ``pairs=`` is a ``TypeError`` (which would win is not clear)."""
-    unknown = set(keywords) - set(allowed)
-    if unknown:
-        raise TypeError(f"unexpected keyword arguments {sorted(unknown)}")
-    if keywords and pairs is not None:
-        raise TypeError(
-            f"pass the pair rule as pairs= alone; got pairs= and {sorted(keywords)} too"
-        )
+def check(pairs, x, surface: Surface, mask) -> Pairs:
+    """``pairs`` (a ``Pairs``, or None for every pair) checked against the
+    slaves ``x`` (f[N, 2]), the master ``surface`` and the slave ``mask``."""
     pairs = EVERY_PAIR if pairs is None else pairs
     if not isinstance(pairs, Pairs):
         raise ValueError(f"pairs must be a jaxcontact.Pairs; got {type(pairs).__name__}")
-    if keywords:
-        words = ", ".join(f"{name}=" for name in keywords)
-        warnings.warn(
-            f"the keywords {words} are replaced by pairs=jaxcontact.Pairs({words}...)",
-            DeprecationWarning,
-            stacklevel=stacklevel + 1,
-        )
-        given = {name: value for name, value in keywords.items() if value is not None}
-        pairs = dataclasses.replace(pairs, **given)
-    return pairs
-
-
-def check(pairs, x, surface: Surface, mask, stacklevel: int = 3, **keywords) -> Pairs:
-    """``pairs`` checked against the slaves ``x`` (f[N, 2]), the master
-    ``surface`` and the slave ``mask``; the replaced keywords (``keywords``:
-    ``slave_node``, ``slave_body``, ``self_contact``) folded in with a
-    ``DeprecationWarning`` (``folded``)."""
-    pairs = folded(pairs, keywords, stacklevel)
     if not isinstance(pairs.self_contact, bool):
         raise ValueError(f"Pairs.self_contact must be a bool; got {pairs.self_contact!r}")
     if pairs.self_contact and pairs.slave_node is None:

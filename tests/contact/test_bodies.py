@@ -326,9 +326,6 @@ def test_self_contact_needs_slave_node_and_bad_pair_inputs_are_named():
     traced = jax.jit(lambda n: all_to_all(x, surface, radius=0.1, pairs=Pairs(n)))(node)
     alone = all_to_all(x, surface, radius=0.1, pairs=Pairs(np.where(node < 44, node, -1)))
     np.testing.assert_array_equal(traced.segment, alone.segment)
-    mesh = jax.make_mesh((1,), ("slaves",))
-    with pytest.raises(ValueError, match="sharded.* splits the slave arrays only: pairs"):
-        jaxcontact.sharded(all_to_all, mesh)(x, surface, radius=0.1, pairs=Pairs(slave_node))
 
 
 def test_the_version_is_the_package_metadata():

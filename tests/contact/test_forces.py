@@ -18,7 +18,16 @@ import numpy as np
 import pytest
 from jax.test_util import check_grads
 
-from jaxcontact import ContactList, Pairs, Search, Surface, all_to_all, bucket_sort, track
+from jaxcontact import (
+    ContactList,
+    Pairs,
+    Search,
+    Smooth,
+    Surface,
+    all_to_all,
+    bucket_sort,
+    track,
+)
 from jaxcontact.forces import Forces, Friction, coulomb, penalty
 from tests.helpers import FLOAT
 from tests.tolerances import (
@@ -76,14 +85,14 @@ def slide(theta, mu, split: bool = False):
     offsets = jnp.asarray(OFFSETS)[:, None] * up[None, :]
     state = search.init(jnp.zeros((3, 2)), surface, sizes=None)  # inside jit: no allocate
     # The block rests on the incline before the first step: its contact is history.
-    _, state, _ = search.closest(state, start[None, :] + offsets, surface)
+    _, state = search.closest(state, start[None, :] + offsets, surface)
 
     def step(carry, _):
         centre, velocity, state, friction = carry
         x = centre[None, :] + offsets
-        contact, state, slip = search.closest(state, x, surface)
+        contact, state = search.closest(state, x, surface)
         forces, friction = coulomb(
-            contact, slip, friction, surface, stiffness=K_N, tangent_stiffness=K_T, mu=mu
+            contact, state.slip, friction, surface, stiffness=K_N, tangent_stiffness=K_T, mu=mu
         )
         total = forces.on_slaves.sum(0) + jnp.array([0.0, -MASS * GRAVITY])
         velocity = velocity + DT * total / MASS
@@ -159,7 +168,8 @@ def test_friction_never_adds_energy_over_a_random_run():
         along = np.clip(along + rng.normal(0, 0.05, 6), 0.3, 2.7)
         x = np.stack([along, 0.1 * np.sin(3 * along) - rng.uniform(-0.005, 0.02, 6)], -1)
         surface = wavy_master(dtype, rng.normal(0, 0.01, (11, 2)))
-        contact, state, slip = step(state, jnp.asarray(x, dtype), surface)
+        contact, state = step(state, jnp.asarray(x, dtype), surface)
+        slip = state.slip
         last = np.asarray(friction.traction, np.float64)
         forces, friction = coulomb(
             contact, slip, friction, surface, stiffness=k_n, tangent_stiffness=k_t, mu=mu
@@ -319,7 +329,7 @@ def test_bad_force_inputs_are_named():
 
 
 def test_compact_and_dense_searches_give_the_same_frictional_forces_under_vmap():
-    """Search(track=True, normals="smooth") + coulomb: the dense Contact (two
+    """Search(track=True, normals=Smooth()) + coulomb: the dense Contact (two
     scenes under vmap) and the compact ContactList (scene by scene, with the
     gradient of the master's load) give the same forces over a 4-step scan."""
     dtype = FLOAT
@@ -333,16 +343,22 @@ def test_compact_and_dense_searches_give_the_same_frictional_forces_under_vmap()
         def step(carry, move):
             state, friction, x = carry
             x = x + move
-            contact, state, slip = search.closest(state, x, floor)
+            contact, state = search.closest(state, x, floor)
             forces, friction = coulomb(
-                contact, slip, friction, floor, stiffness=100.0, tangent_stiffness=50.0, mu=0.4
+                contact,
+                state.slip,
+                friction,
+                floor,
+                stiffness=100.0,
+                tangent_stiffness=50.0,
+                mu=0.4,
             )
             return (state, friction, x), forces
 
         return jax.lax.scan(step, (state, Friction.zeros(6, dtype), x), moves)[1]
 
     searches = [
-        Search(radius=0.2, method="unbinned", compact=compact, track=True, normals="smooth")
+        Search(radius=0.2, method="unbinned", compact=compact, track=True, normals=Smooth())
         for compact in (False, True)
     ]
     states = [search.allocate(x0, floor) for search in searches]

@@ -38,9 +38,9 @@ def dragged(speed, mu):
     def step(carry, k):
         state, friction = carry
         x = start + jnp.stack([speed * k, 0.0 * k])[None, :]
-        contact, state, slip = SEARCH.closest(state, x, FLOOR)
+        contact, state = SEARCH.closest(state, x, FLOOR)
         forces, friction = coulomb(
-            contact, slip, friction, FLOOR, stiffness=100.0, tangent_stiffness=50.0, mu=mu
+            contact, state.slip, friction, FLOOR, stiffness=100.0, tangent_stiffness=50.0, mu=mu
         )
         return (state, friction), forces.on_slaves[0, 0]
 

@@ -137,7 +137,8 @@ def tracked_run(search: Search, xs, surfaces):
 
     def step(state, inputs):
         x, nodes = inputs
-        contact, state, slip = search.closest(state, x, first._replace(nodes=nodes))
+        contact, state = search.closest(state, x, first._replace(nodes=nodes))
+        slip = state.slip
         if isinstance(contact, jaxcontact.ContactList):
             contact = contact.to_contact(x.shape[0])
         return state, (slip, contact.active)
@@ -180,10 +181,17 @@ def test_plain_track_equals_the_search_and_forget_drops_rows():
     np.testing.assert_allclose(np.asarray(plain.slip), slips[0], atol=SLIP_ATOL)
     search = Search(radius=RADIUS, method="exhaustive", track=True)
     state = search.allocate(xs[0], one(0))
-    _, state, _ = search.closest(state, xs[0], one(0))
+    # Before the first step the state's slip is zeros, nothing persisted.
+    before = state.slip
+    assert before.slip.shape == (len(SLIDES),) and before.anchor.shape == (len(SLIDES), 2)
+    assert not bool(before.persisted.any()) and not np.asarray(before.anchor).any()
+    np.testing.assert_array_equal(np.asarray(before.slip), 0)
+    assert Search(radius=RADIUS, method="exhaustive").allocate(xs[0], one(0)).slip is None
+    _, state = search.closest(state, xs[0], one(0))
     rows = jnp.arange(len(SLIDES)) % 2 == 0
     state = state.forget(rows)
-    _, _, slip = search.closest(state, xs[1], one(1))
+    _, state = search.closest(state, xs[1], one(1))
+    slip = state.slip
     assert not bool(slip.persisted[rows].any()) and bool(slip.persisted[~rows].all())
     np.testing.assert_array_equal(np.asarray(slip.slip[rows]), 0)
     np.testing.assert_allclose(
@@ -205,8 +213,8 @@ def test_rows_not_found_hold_zeros_and_batches_map():
     assert state.history.found.shape == batch.shape[:2]
 
     def two_steps(state, first, second):
-        _, state, _ = search.closest(state, first, one)
-        return search.closest(state, second, one)[2]
+        _, state = search.closest(state, first, one)
+        return search.closest(state, second, one)[1].slip
 
     slip = jax.vmap(two_steps)(state, batch, jnp.stack([x_far, xs[0]]))
     assert not bool(slip.persisted[0, 0]) and bool(slip.persisted[1, 0])
@@ -220,12 +228,12 @@ def test_a_regrown_state_keeps_its_history_and_bad_states_are_refused():
     one = lambda t: Surface(surfaces.nodes[t], surfaces.segments, surfaces.mask)  # noqa: E731
     search = Search(radius=RADIUS, method="unbinned", track=True)
     state = search.allocate(xs[0], one(0))
-    _, state, _ = search.closest(state, xs[0], one(0))
+    _, state = search.closest(state, xs[0], one(0))
     # Reallocated at larger sizes (as resumable_scan's grow does): the history stays.
     grown = Search(radius=RADIUS, method="unbinned", track=True, slack=3.0).allocate(
         xs[1], one(1), at_least=state
     )
-    _, _, slip = search.closest(grown, xs[1], one(1))
+    slip = search.closest(grown, xs[1], one(1))[1].slip
     assert bool(slip.persisted.all())
     np.testing.assert_allclose(np.asarray(slip.slip), slips[0], atol=SLIP_ATOL)
     with pytest.raises(ValueError, match="slip history has shape"):
@@ -252,8 +260,8 @@ def test_many_rows_are_worked_on_compacted_or_all_alike(found_rows):
     last_x = far.at[: copies * len(SLIDES)].set(jnp.tile(xs[0], (copies, 1)))
     x = far.at[: copies * len(SLIDES)].set(jnp.tile(xs[1], (copies, 1)))
     last = all_to_all(last_x, one(0), radius=RADIUS)
-    now = all_to_all(x, one(1), radius=RADIUS, normals="smooth")
-    small = all_to_all(xs[1], one(1), radius=RADIUS, normals="smooth")
+    now = all_to_all(x, one(1), radius=RADIUS, normals=jaxcontact.Smooth())
+    small = all_to_all(xs[1], one(1), radius=RADIUS, normals=jaxcontact.Smooth())
     assert (int(now.found.sum()) > 1024) == (found_rows == "many")
     slip = jaxcontact.track(last, now, one(1))
     expected = np.zeros(num_rows)

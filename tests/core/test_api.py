@@ -1,28 +1,33 @@
-"""The public surface of 1.0: its layout, every mix of concrete and traced
-arguments, and the names 1.0 replaced (they warn and keep working)."""
+"""The public surface of 2.0: its layout, every mix of concrete and traced
+arguments, and the names 2.0 removed (they fail, naming their replacement)."""
 
 import ast
+import importlib
 import pathlib
+import subprocess
+import sys
 
 import jax
-import jax.numpy as jnp
 import numpy as np
 import pytest
 
 import jaxcontact
 from jaxcontact import (
+    Contact,
     Pairs,
     Search,
     Surface,
+    _removed,
     all_to_all,
     bucket_sort,
     bucket_swept,
     swept,
 )
-from jaxcontact.forces import penalty
 from tests.helpers import local_atol
 
 PACKAGE = pathlib.Path(jaxcontact.__file__).resolve().parent
+# The public names that are submodules.
+MODULES = ("forces", "scenes")
 
 # A small scene: a floor of three segments, four slaves above and below it.
 NODES = np.array([[3.0, 0.0], [2.0, 0.0], [1.0, 0.0], [0.0, 0.0]])
@@ -111,7 +116,7 @@ def test_the_cycle_check_finds_a_cycle():
 def test_the_stages_import_no_entry_point():
     # The pipeline's stages sit below the queries and the entry points.
     graph = _import_graph()
-    above = {"jaxcontact", "jaxcontact._detect", "jaxcontact._search", "jaxcontact._shard"}
+    above = {"jaxcontact", "jaxcontact._detect", "jaxcontact._search"}
     for name, targets in graph.items():
         if name.startswith("jaxcontact._pipeline"):
             assert not targets & above, (name, targets & above)
@@ -120,11 +125,34 @@ def test_the_stages_import_no_entry_point():
 
 def test_every_public_name_is_documented():
     public = [name for name in dir(jaxcontact) if not name.startswith("_")]
-    assert "Pairs" in public and "clear_sizes" in public
+    # dir() lists __all__ (and __version__): the new names, none that 2.0 removed.
+    assert sorted(public) == sorted(jaxcontact.__all__)
+    assert {"Pairs", "Smooth", "check_overflow"} <= set(public)
+    assert not {"clear_sizes", "sharded", "contact_forces"} & set(public)
     for name in public:
-        value = getattr(jaxcontact, name)
+        # The submodules (forces, scenes) by import: test_import_gives_every_public_name
+        # checks that the package itself gives them.
+        value = importlib.import_module(f"jaxcontact.{name}") if name in MODULES else None
+        value = getattr(jaxcontact, name) if value is None else value
         if callable(value):
             assert value.__doc__ and len(value.__doc__) > 40, name
+
+
+def test_import_gives_every_public_name():
+    # A fresh process: in this one another test may already have imported the
+    # submodules. docs/contract.md calls jaxcontact.forces.coulomb after a
+    # plain ``import jaxcontact``.
+    code = (
+        "import jaxcontact\n"
+        "for name in jaxcontact.__all__:\n"
+        "    getattr(jaxcontact, name)\n"
+        "print(jaxcontact.forces.penalty.__name__, jaxcontact.scenes.grid.__name__)"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, cwd=PACKAGE.parent
+    )
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert done.stdout.split() == ["penalty", "grid"]
 
 
 # -- concrete and traced arguments --------------------------------------------------
@@ -248,7 +276,7 @@ def test_pairs_must_be_a_pairs():
         all_to_all(X, _surface(), radius=RADIUS, pairs={"slave_node": SLAVE_NODE})
 
 
-# -- the names 1.0 replaced ------------------------------------------------------------
+# -- the names 2.0 removed ---------------------------------------------------------------
 
 
 def _same(got, want):
@@ -256,43 +284,72 @@ def _same(got, want):
         np.testing.assert_array_equal(np.asarray(getattr(got, field)), np.asarray(value), field)
 
 
+# The removed module attributes; Search(method=...) is a value, not an attribute (below).
+REMOVED_ATTRIBUTES = [
+    name for name in _removed.REMOVED if not name.startswith("jaxcontact.Search(")
+]
+
+
+@pytest.mark.parametrize("name", REMOVED_ATTRIBUTES)
+def test_a_removed_attribute_fails_naming_its_replacement(name):
+    module, _, attribute = name.rpartition(".")
+    replacement, _, removed_in = _removed.REMOVED[name]
+    with pytest.raises(AttributeError) as raised:
+        getattr(importlib.import_module(module), attribute)
+    assert str(raised.value) == f"{name} was removed in {removed_in}: {replacement}"
+    assert not hasattr(importlib.import_module(module), attribute)
+
+
+def test_the_removed_attributes_are_the_four_of_2_0():
+    # The parametrisation above is over the table: an emptied table would pass it.
+    assert set(REMOVED_ATTRIBUTES) == {
+        "jaxcontact.clear_sizes",
+        "jaxcontact.sharded",
+        "jaxcontact.contact_forces",
+        "jaxcontact.forces.contact_forces",
+    }
+    assert "penalty" in _removed.REMOVED["jaxcontact.forces.contact_forces"][0]
+
+
+def test_an_unknown_attribute_is_a_plain_attribute_error():
+    with pytest.raises(AttributeError, match="module 'jaxcontact' has no attribute 'nothing'"):
+        jaxcontact.nothing  # noqa: B018
+
+
+def test_the_removed_search_method_fails_naming_its_replacement():
+    with pytest.raises(
+        ValueError, match=r'method="dense"\) was removed in 2\.0: use method="unbinned"'
+    ):
+        Search(radius=RADIUS, method="dense")
+
+
 @pytest.mark.parametrize("detector", ["all_to_all", "bucket_sort", "swept", "bucket_swept"])
-def test_the_replaced_pair_keywords_warn_and_give_the_pairs_answer(detector):
-    call = {**EXHAUSTIVE, **ONE_CALL_BUCKET}[detector]
-    want = call(*CONCRETE)
+@pytest.mark.parametrize("keyword", ["slave_node", "slave_body", "self_contact"])
+def test_a_removed_pair_keyword_fails_as_python_fails_it(detector, keyword):
+    # Whatever its value, None and False too: pairs=Pairs(...) is the one form.
     detect = getattr(jaxcontact, detector)
     args = (X, _surface()) if "swept" not in detector else (X_PREV, X, _surface())
     radius = {} if "swept" in detector else {"radius": RADIUS}
-    with pytest.warns(
-        DeprecationWarning, match=r"slave_node= .*replaced by pairs=jaxcontact\.Pairs"
-    ):
-        got = detect(*args, **radius, mask=MASK, slave_node=SLAVE_NODE)
-    _same(got, want)
+    with pytest.raises(TypeError, match=f"unexpected keyword argument '{keyword}'"):
+        detect(*args, **radius, mask=MASK, **{keyword: None})
 
 
-def test_the_replaced_search_names_warn_and_keep_working():
-    with pytest.warns(DeprecationWarning, match='method="unbinned"'):
-        old = Search(radius=RADIUS, method="dense")
-    assert old == Search(radius=RADIUS, method="unbinned")
-    with pytest.warns(DeprecationWarning, match=r"Pairs\(self_contact=True"):
-        own = Search(radius=RADIUS, self_contact=True)
+def test_the_search_takes_no_pair_keywords_and_no_self_contact():
     node = np.arange(4, dtype=np.int32)
-    with pytest.warns(DeprecationWarning, match="slave_node= are replaced by pairs="):
-        state = own.allocate(NODES, _surface(), slave_node=node)
-    with pytest.warns(DeprecationWarning, match="slave_node= are replaced by pairs="):
-        contact, _ = own.closest(state, NODES, _surface(), slave_node=node)
+    with pytest.raises(TypeError, match="unexpected keyword argument 'self_contact'"):
+        Search(radius=RADIUS, self_contact=True)
+    search = Search(radius=RADIUS)
+    with pytest.raises(TypeError, match="unexpected keyword argument 'slave_node'"):
+        search.allocate(NODES, _surface(), slave_node=node)
     rule = Pairs(node, self_contact=True)
+    state = search.allocate(NODES, _surface(), pairs=rule)
+    with pytest.raises(TypeError, match="unexpected keyword argument 'slave_node'"):
+        search.closest(state, NODES, _surface(), slave_node=node)
+    with pytest.raises(TypeError, match="unexpected keyword argument 'slave_body'"):
+        search.swept(state, NODES, NODES, _surface(), slave_body=node)
+    # The rule passed to each call, as Search(self_contact=True) applied it.
+    contact, _ = search.closest(state, NODES, _surface(), pairs=rule)
     _same(contact, all_to_all(NODES, _surface(), radius=RADIUS, pairs=rule))
-
-
-def test_contact_forces_warns_and_equals_the_penalty():
-    contact = all_to_all(X, _surface(), radius=RADIUS)
-    assert bool(contact.active.any())
-    with pytest.warns(DeprecationWarning, match=r"jaxcontact\.forces\.penalty"):
-        on_slaves, on_master = jaxcontact.contact_forces(contact, 10.0)
-    forces = penalty(contact, _surface(), 10.0)
-    np.testing.assert_allclose(on_slaves, forces.on_slaves)
-    np.testing.assert_allclose(on_master, jnp.sum(forces.on_master, axis=0), atol=1e-12)
 
 
 def test_the_wheel_lists_every_package_of_the_library_and_nothing_else():
@@ -346,20 +403,6 @@ def test_a_users_rule_must_be_a_function():
         all_to_all(X, _surface(), radius=RADIUS, pairs=Pairs(allow=3))
 
 
-def test_pairs_and_a_replaced_keyword_together_are_refused():
-    with pytest.raises(TypeError, match="pass the pair rule as pairs= alone"):
-        all_to_all(X, _surface(), radius=RADIUS, pairs=Pairs(SLAVE_NODE), slave_node=SLAVE_NODE)
-    with pytest.raises(TypeError, match="pass the pair rule as pairs= alone"):
-        Search(radius=RADIUS).allocate(X, _surface(), pairs=Pairs(), slave_body=SLAVE_NODE)
-
-
-def test_a_replaced_keyword_warns_whatever_its_value():
-    with pytest.warns(DeprecationWarning, match="self_contact="):
-        all_to_all(X, _surface(), radius=RADIUS, self_contact=False)
-    with pytest.warns(DeprecationWarning, match="slave_node="):
-        swept(X_PREV, X, _surface(), slave_node=None)
-
-
 def test_search_steps_take_plain_lists_as_the_one_call_forms_do():
     search = Search(radius=RADIUS)
     state = search.allocate(X, _surface(), x_prev=X_PREV)
@@ -367,7 +410,25 @@ def test_search_steps_take_plain_lists_as_the_one_call_forms_do():
     np.testing.assert_array_equal(crossing.segment, swept(X_PREV, X, _surface()).segment)
 
 
-def test_sharded_takes_the_default_pair_rule():
+def test_shard_map_over_a_detector_takes_the_pair_rule_split_with_the_slaves():
+    # The route to many devices (jaxcontact.sharded is gone): the user's own
+    # shard_map, the rule's per-slave array split as the slaves are. Slave 2
+    # is node 1: without the rule it meets segment 0, with it nothing.
     mesh = jax.make_mesh((1,), ("slaves",))
-    got = jaxcontact.sharded(all_to_all, mesh)(X, _surface(), radius=RADIUS, pairs=Pairs())
-    np.testing.assert_array_equal(got.segment, all_to_all(X, _surface(), radius=RADIUS).segment)
+
+    def detect(x, slave_node):
+        return all_to_all(x, _surface(), radius=RADIUS, pairs=Pairs(slave_node))
+
+    spec = jax.sharding.PartitionSpec("slaves")
+    # Per-slave fields split as x's rows; the bool[] overflow one per program.
+    fields = Contact(*[spec] * len(Contact._fields))._replace(overflow=jax.sharding.PartitionSpec())
+    # check_vma=False: the detectors' conds return constants where they skip
+    # work, which shard_map's check of varying axes refuses (docs/guides/devices.md).
+    mapped = jax.shard_map(
+        detect, mesh=mesh, in_specs=(spec, spec), out_specs=fields, check_vma=False
+    )
+    got = jax.jit(mapped)(X, SLAVE_NODE)
+    want = all_to_all(X, _surface(), radius=RADIUS, pairs=Pairs(SLAVE_NODE))
+    _same(got, want)
+    assert int(want.segment[2]) == -1
+    assert int(all_to_all(X, _surface(), radius=RADIUS).segment[2]) == 0

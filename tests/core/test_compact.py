@@ -22,7 +22,6 @@ from jaxcontact import (
     all_to_all,
     bucket_sort,
     bucket_swept,
-    sharded,
     swept,
 )
 from jaxcontact._pipeline import driver
@@ -91,6 +90,11 @@ def test_one_call_compact_packs_the_dense_rows(scene_name):
     entries = bucket_sort(x, scene.surface, radius=scene.radius, mask=mask, compact=True)
     assert not bool(entries.overflow)
     assert_packs(entries, dense, num_rows)
+    # The capacity is Search(compact=True)'s: the contacts found times the
+    # slack, not one entry per slave the cull kept.
+    sizes = Search(radius=scene.radius, compact=True).allocate(x, scene.surface, mask=mask).sizes
+    assert entries.node.shape == (sizes.contact_capacity,)
+    assert int(dense.found.sum()) <= sizes.contact_capacity < sizes.slave_capacity
 
 
 def test_search_compact_in_a_scan_equals_all_to_all_at_every_step():
@@ -168,9 +172,6 @@ def test_compact_misuse_raises_a_clear_error():
         Search(radius=RADIUS, method="exhaustive", compact=True)
     with pytest.raises(ValueError, match="compact must be a bool"):
         Search(radius=RADIUS, compact=1)
-    mesh = jax.make_mesh((1,), ("d",))
-    with pytest.raises(ValueError, match="compact=True is not supported"):
-        sharded(bucket_sort, mesh)(scene.x, scene.surface, radius=RADIUS, compact=True)
     dense_state = Search(radius=RADIUS).allocate(scene.x, scene.surface)
     with pytest.raises(ValueError, match="allocated by a N-row search; this one is compact"):
         Search(radius=RADIUS, compact=True).closest(dense_state, scene.x, scene.surface)
@@ -265,6 +266,11 @@ def test_one_call_compact_swept_packs_the_crossed_rows():
     entries = bucket_swept(scene.x_prev, x, scene.surface, mask=mask, compact=True)
     assert not bool(entries.overflow)
     assert_packs_crossings(entries, dense, x.shape[0])
+    # The capacity is Search(compact=True)'s: the paths crossing times the slack.
+    paths = Search(compact=True).allocate(x, scene.surface, x_prev=scene.x_prev, mask=mask)
+    sizes = paths.path_sizes
+    assert entries.node.shape == (sizes.contact_capacity,)
+    assert int(dense.crossed.sum()) <= sizes.contact_capacity < sizes.slave_capacity
 
 
 def test_search_compact_swept_measures_its_capacity_and_overflows_when_outgrown():

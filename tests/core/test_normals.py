@@ -1,4 +1,4 @@
-"""Smooth normals (``normals="smooth"``): continuous over a faceted curve, sharp at corners.
+"""Smooth normals (``normals=Smooth(corner)``): continuous over a faceted curve, sharp at corners.
 
 One outline serves every test: a "D", counter-clockwise, whose right half
 is a unit semicircle faceted into 24 segments (the outline turns by 7.5
@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 from jax.test_util import check_grads
 
-from jaxcontact import Search, Surface, all_to_all, bucket_sort
+from jaxcontact import Search, Smooth, Surface, all_to_all, bucket_sort
 from jaxcontact.forces import penalty
 from tests.helpers import FLOAT, assert_same_contact, local_atol
 
@@ -61,8 +61,11 @@ AT_CORNER = slice(320, 400)
 SCATTERED = np.random.default_rng(0).uniform(-1.3, 1.3, (NUM_SLAVES, 2)).astype(FLOAT)
 
 
-def contact_of(x, normals="smooth", corner=45.0):
-    return all_to_all(jnp.asarray(x), SURFACE, radius=RADIUS, normals=normals, corner=corner)
+SMOOTH = Smooth(corner=45.0)  # the default corner
+
+
+def contact_of(x, normals=SMOOTH):
+    return all_to_all(jnp.asarray(x), SURFACE, radius=RADIUS, normals=normals)
 
 
 def turns(vectors) -> np.ndarray:
@@ -74,7 +77,7 @@ def turns(vectors) -> np.ndarray:
 
 
 def test_normal_and_force_turn_without_jumps_over_the_arc_but_jump_at_the_corner():
-    smooth, flat = contact_of(SLIDING), contact_of(SLIDING, "flat")
+    smooth, flat = contact_of(SLIDING), contact_of(SLIDING, None)
     assert bool(smooth.active.all()) and bool(flat.active.all())
     # Flat: constant on a facet, a jump of the full turn at each vertex.
     assert turns(flat.normal[ON_ARC]).max() >= 0.95 * TURN
@@ -103,7 +106,7 @@ def test_normal_and_force_turn_without_jumps_over_the_arc_but_jump_at_the_corner
 
 
 def test_gap_is_measured_along_the_smooth_normal_with_the_flat_sign():
-    smooth, flat = contact_of(SCATTERED), contact_of(SCATTERED, "flat")
+    smooth, flat = contact_of(SCATTERED), contact_of(SCATTERED, None)
     found = np.asarray(flat.found)
     assert 100 <= found.sum() < NUM_SLAVES
     # What the flat search found stays: only the normal and the gap change.
@@ -132,12 +135,12 @@ def test_gap_is_measured_along_the_smooth_normal_with_the_flat_sign():
 
 def test_compact_bucket_sort_and_search_give_all_to_all_smooth_normals():
     x = jnp.asarray(SCATTERED)
-    dense, flat = contact_of(x), contact_of(x, "flat")
+    dense, flat = contact_of(x), contact_of(x, None)
     assert np.abs(np.asarray(dense.normal - flat.normal)).max() > 1e-3  # the check can tell
     # The one-call compact form (a ContactList smoothed entry by entry) and the
     # binned Search's dense Contact; a dense Contact is smoothed as all_to_all's is.
-    listed = bucket_sort(x, SURFACE, radius=RADIUS, normals="smooth", compact=True)
-    search = Search(radius=RADIUS, method="binned", normals="smooth")
+    listed = bucket_sort(x, SURFACE, radius=RADIUS, normals=Smooth(), compact=True)
+    search = Search(radius=RADIUS, method="binned", normals=Smooth())
     searched, _ = search.closest(search.allocate(x, SURFACE), x, SURFACE)
     for contact in (listed.to_contact(NUM_SLAVES), searched):
         assert_same_contact(contact, dense, radius=RADIUS)
@@ -160,11 +163,11 @@ GRAD_SLAVES = {
 
 def gap_total(x, nodes, power=2):
     surface = SURFACE._replace(nodes=nodes)
-    return jnp.sum(all_to_all(x, surface, radius=RADIUS, normals="smooth").gap ** power)
+    return jnp.sum(all_to_all(x, surface, radius=RADIUS, normals=Smooth()).gap ** power)
 
 
 def contact_of_grad_slaves(x):
-    return all_to_all(x, SURFACE, radius=RADIUS, normals="smooth")
+    return all_to_all(x, SURFACE, radius=RADIUS, normals=Smooth())
 
 
 squared_gap_gradients = jax.jit(jax.grad(gap_total, argnums=(0, 1)))
@@ -188,7 +191,7 @@ def test_gap_gradient_matches_finite_differences_away_from_vertices():
 
 
 def test_corner_below_the_turn_keeps_those_vertices_sharp():
-    sharp, flat = contact_of(SCATTERED, corner=5.0), contact_of(SCATTERED, "flat")
+    sharp, flat = contact_of(SCATTERED, Smooth(corner=5.0)), contact_of(SCATTERED, None)
     segment, xi = np.asarray(flat.segment), np.asarray(flat.xi)
     atol = local_atol(FLOAT, 2.0)
     # The arc's inner facets turn by 7.5 degrees at both ends: flat normals and
@@ -199,7 +202,7 @@ def test_corner_below_the_turn_keeps_those_vertices_sharp():
     np.testing.assert_allclose(sharp.normal[inner], flat.normal[inner], atol=atol)
     np.testing.assert_allclose(sharp.gap[inner], flat.gap[inner], atol=atol)
     # No corner smoothed at all: the flat search, every row.
-    none = contact_of(SCATTERED, corner=0.0)
+    none = contact_of(SCATTERED, Smooth(corner=0))
     np.testing.assert_allclose(none.gap, flat.gap, atol=atol)
     np.testing.assert_allclose(none.normal, flat.normal, atol=atol)
     # Where the arc meets the top (a 3.75 degree turn) the normal still turns.
@@ -209,12 +212,25 @@ def test_corner_below_the_turn_keeps_those_vertices_sharp():
     assert tilt.min() > 0.4 * math.sin(math.radians(TURN / 4))  # 1.875 (1 - xi) degrees
 
 
-def test_unknown_normals_or_corner_out_of_range_raise():
+def test_smooth_is_the_one_way_to_ask_for_smooth_normals():
     x = jnp.asarray(SCATTERED[:3])
-    for keywords in ({"normals": "round"}, {"corner": 200}, {"corner": -1}):
-        with pytest.raises(ValueError, match="normals|corner"):
-            all_to_all(x, SURFACE, radius=RADIUS, **keywords)
-        with pytest.raises(ValueError, match="normals|corner"):
-            bucket_sort(x, SURFACE, radius=RADIUS, **keywords)
-        with pytest.raises(ValueError, match="normals|corner"):
-            Search(radius=RADIUS, **keywords)
+    assert Smooth() == Smooth(corner=45.0) and Smooth(corner=30).corner == 30.0
+    for corner in (200, -1, float("nan"), "sharp"):
+        with pytest.raises(ValueError, match="Smooth.corner must"):
+            Smooth(corner=corner)
+    assert Smooth(corner=0).corner == 0.0 and Smooth(corner=180).corner == 180.0  # the ends
+    # 1.x's strings fail naming Smooth, in every form that takes normals=.
+    for normals in ("smooth", "flat"):
+        with pytest.raises(TypeError, match=r"normals=jaxcontact\.Smooth\(corner=45\.0\)"):
+            all_to_all(x, SURFACE, radius=RADIUS, normals=normals)
+        with pytest.raises(TypeError, match="Smooth"):
+            bucket_sort(x, SURFACE, radius=RADIUS, normals=normals)
+        with pytest.raises(TypeError, match="Smooth"):
+            Search(radius=RADIUS, normals=normals)
+    with pytest.raises(ValueError, match="normals must be None or a jaxcontact.Smooth; got int"):
+        all_to_all(x, SURFACE, radius=RADIUS, normals=3)
+    # corner= moved into Smooth: the old keyword is Python's own TypeError.
+    with pytest.raises(TypeError, match="unexpected keyword argument 'corner'"):
+        all_to_all(x, SURFACE, radius=RADIUS, normals=Smooth(), corner=30.0)
+    with pytest.raises(TypeError, match="unexpected keyword argument 'corner'"):
+        Search(radius=RADIUS, normals=Smooth(), corner=30.0)

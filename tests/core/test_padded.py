@@ -1,7 +1,10 @@
-"""Plain calls pad to size classes: a long process compiles few programs.
+"""Plain exhaustive calls pad to size classes: a long process compiles few programs.
 
 Each program XLA compiles maps hundreds of memory regions into the process
-(benchmarks/archive/long_process.py); plain calls at many shapes must share programs.
+(1.2's benchmarks/archive/long_process.py, at git tag benchmarks-archive-1.2);
+plain calls of ``all_to_all`` and ``swept`` at many shapes must share programs.
+The one-call bucket forms are a ``Search`` allocated per call: they pad
+nothing and keep nothing between calls.
 """
 
 import jax
@@ -27,9 +30,7 @@ def _crossing(detect):
 
 DETECTORS = {
     "all_to_all": (_closest(all_to_all), driver.exhaustive),
-    "bucket_sort": (_closest(bucket_sort), driver.sized_jit),
     "swept": (_crossing(swept), driver.exhaustive),
-    "bucket_swept": (_crossing(bucket_swept), driver.sized_jit),
 }
 
 
@@ -106,17 +107,10 @@ def test_traced_calls_are_not_padded():
 
 
 @pytest.mark.parametrize("query", ["closest", "swept"])
-def test_plain_bucket_calls_keep_their_sizes_and_measure_again_only_past_them(query, monkeypatch):
-    # The one-call forms keep the sizes they measured per padded shape (as a
-    # Search does) and measure again only when a search at them overflows.
-    import jaxcontact._detect as bucket
-
-    measured = []
-    real_measure = bucket.measure
-    monkeypatch.setattr(
-        bucket, "measure", lambda *a, **k: measured.append(1) or real_measure(*a, **k)
-    )
-    bucket.clear_sizes()
+def test_plain_bucket_calls_keep_nothing_between_calls(query):
+    # Each one-call form measures its sizes from its own data: a call whose
+    # slaves spread past the previous call's (one block of 64 rows near the
+    # master, then all 256) still gives the dense answer, not an overflow.
     rng = np.random.default_rng(1)
     near = rng.uniform([0.0, -0.25], [3.0, 0.25], (256, 2))
     one_block = near.copy()
@@ -126,15 +120,14 @@ def test_plain_bucket_calls_keep_their_sizes_and_measure_again_only_past_them(qu
         detect, dense, flag = _closest(bucket_sort), _closest(all_to_all), "found"
     else:
         detect, dense, flag = _crossing(bucket_swept), _crossing(swept), "crossed"
-    # Kept, still enough, outgrown (measured again), then the larger ones kept.
-    for x, measures in ((one_block, 1), (one_block + 0.01, 1), (near, 2), (one_block, 2)):
+    for x in (one_block, one_block + 0.01, near, one_block):
         got, want = detect(x, surface), dense(x, surface)
-        assert len(measured) == measures
         assert not bool(got.overflow)
         np.testing.assert_array_equal(got.segment, want.segment)
         np.testing.assert_array_equal(getattr(got, flag), getattr(want, flag))
         assert getattr(want, flag).any()
-    bucket.clear_sizes()
+    counts = [int(getattr(dense(x, surface), flag).sum()) for x in (one_block, near)]
+    assert counts[1] > counts[0]  # the third call does outgrow the first's sizes
 
 
 def test_checked_host_inputs_stay_numpy_in_the_dtype_jax_computes_in():

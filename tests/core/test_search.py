@@ -12,7 +12,16 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxcontact import Search, SearchState, Sizes, Surface, all_to_all, bucket_sort, swept
+from jaxcontact import (
+    Search,
+    SearchState,
+    Sizes,
+    Surface,
+    all_to_all,
+    bucket_sort,
+    check_overflow,
+    swept,
+)
 from jaxcontact.scenes import cutting_scene
 from tests.helpers import FLOAT, assert_same_contact, assert_same_crossing, gradient_atol
 
@@ -398,3 +407,26 @@ def test_allocate_warns_when_no_slave_is_near_the_master():
     masked = jnp.zeros(200, bool).at[0].set(True)
     with pytest.warns(UserWarning, match="no slave comes"):
         search.allocate(low.at[0].set(high[0]), floor, mask=masked)
+
+
+def test_check_overflow_is_silent_until_a_state_overflows_then_raises_saying_what_to_do():
+    """``check_overflow``: the run's one check on the host, over any pytree of states."""
+    floor, high = _floor_and_chain(2.0)
+    _, low = _floor_and_chain(0.06)
+    search = Search(radius=RADIUS)
+    with pytest.warns(UserWarning, match="hold no contact"):
+        state = search.allocate(high, floor)
+    assert check_overflow(state) is None
+    assert check_overflow({"carry": (state, jnp.zeros(3))}) is None
+    # The chain falls onto the floor: the sizes measured before contact overflow,
+    # and the flag stays set through a later step that fits.
+    _, fallen = search.closest(state, low, floor)
+    _, after = search.closest(fallen, high, floor)
+    assert bool(after.overflow)
+    message = r"1 of 2 search state\(s\) overflowed.*at_least=state.*resumable_scan"
+    with pytest.raises(RuntimeError, match=message):
+        check_overflow((state, {"later": after}))
+    with pytest.raises(RuntimeError, match="1 of 1 search state"):
+        check_overflow(fallen)
+    with pytest.raises(ValueError, match="carry holds no jaxcontact SearchState"):
+        check_overflow((jnp.zeros(3), 1.0))

@@ -1,4 +1,6 @@
-"""Arrays sharded with ``jax.sharding``, passed straight to every detector and to ``Search``.
+"""Slaves split over devices: arrays sharded with ``jax.sharding``, passed
+straight to every detector and to ``Search``, and the user's own ``jax.shard_map``
+around a detector (the route that splits the search itself).
 
 Run on 4 CPU devices by ``tests/test_shard.py``. Each case shards the slaves
 (and the surface) one way, on explicit or auto mesh axes, calls half of the
@@ -22,9 +24,19 @@ import pytest
 from jax.sharding import AxisType, NamedSharding
 from jax.sharding import PartitionSpec as P
 
-from jaxcontact import Search, Surface, all_to_all, bucket_sort, bucket_swept, swept
+from jaxcontact import (
+    Contact,
+    Pairs,
+    Search,
+    Surface,
+    all_to_all,
+    bucket_sort,
+    bucket_swept,
+    swept,
+)
 from jaxcontact._pipeline import driver
 from jaxcontact._query.closest import CLOSEST
+from jaxcontact.forces import Forces, penalty
 from tests.helpers import local_atol
 
 RADIUS = 0.25
@@ -252,3 +264,103 @@ def test_inputs_not_split_over_explicit_axes_trace_to_the_same_program():
         CLOSEST, (split,), surface, radius, None
     )
     assert "reshard" in str(got)
+
+
+# -- jax.shard_map: each device searches its own rows ------------------------------
+
+DEVICES = 4
+# The slaves' fields split as their rows, the bool[] overflow one per program.
+SPLIT = Contact(*[P("slaves")] * len(Contact._fields))._replace(overflow=P())
+
+
+def _shard_map(function, in_specs, out_specs):
+    """``function`` mapped over the 4 devices' slaves, as docs/guides/devices.md does.
+
+    check_vma=False: the detectors' conds return constants where they skip
+    work, which shard_map's check of varying axes refuses."""
+    return jax.jit(
+        jax.shard_map(
+            function, mesh=_slaves_mesh(), in_specs=in_specs, out_specs=out_specs, check_vma=False
+        )
+    )
+
+
+def _slaves_mesh():
+    """The 4 devices on one explicit axis, "slaves" (jax.make_mesh's default)."""
+    return jax.make_mesh((DEVICES,), ("slaves",))
+
+
+def _scene_with_own_nodes():
+    """The octagon scene (12 slaves, 3 a device), slaves 0, 5 and 10 (on three
+    devices) placed on octagon nodes 0, 2 and 6 with the pair rule saying so,
+    and a radius per slave."""
+    _, x, surface, mask = _scene(12, np.float64)
+    x, node = np.array(x), np.full(12, -1, np.int32)
+    node[[0, 5, 10]] = [0, 2, 6]
+    x[[0, 5, 10]] = np.asarray(surface.nodes)[[0, 2, 6]]
+    radius = RADIUS * (1 + np.arange(12) % 3) / 2  # 0.125, 0.25, 0.375
+    return x, surface, mask, node, radius
+
+
+@pytest.mark.x64
+def test_shard_map_over_a_detector_with_a_split_pair_rule_equals_one_device():
+    """The documented route: the slaves, their mask, the pair rule's per-slave
+    array and radius split over the devices, the master replicated, and the
+    master's reaction a psum (``penalty(..., axis_name=)``)."""
+    x, surface, mask, node, radius = _scene_with_own_nodes()
+
+    def on_device(x, mask, node, radius, surface):
+        contact = all_to_all(x, surface, radius=radius, mask=mask, pairs=Pairs(node))
+        return contact, penalty(contact, surface, 1e3, axis_name="slaves")
+
+    rows = P("slaves")
+    mapped = _shard_map(on_device, (rows, rows, rows, rows, P()), (SPLIT, Forces(rows, P())))
+    contact, forces = mapped(x, mask, node, radius, surface)
+    want = all_to_all(x, surface, radius=radius, mask=mask, pairs=Pairs(node))
+    _assert_same("shard_map all_to_all", contact, want)
+    want_forces = penalty(want, surface, 1e3)
+    atol = local_atol(np.float64, scale=1e3)
+    np.testing.assert_allclose(forces.on_slaves, want_forces.on_slaves, rtol=0, atol=atol)
+    np.testing.assert_allclose(forces.on_master, want_forces.on_master, rtol=0, atol=atol)
+    # What the check can tell: the rule and the radii change the answer on
+    # each device, and the reaction comes from more than one device's rows.
+    plain = all_to_all(x, surface, radius=RADIUS, mask=mask)
+    own = np.array([0, 5, 10])
+    # Each own-node slave lies on its node: at gap 0 without the rule, and
+    # nothing else of the octagon within its radius with it.
+    assert (np.asarray(plain.gap)[own] == 0).all() and np.asarray(plain.found)[own].all()
+    assert not np.asarray(want.found)[own].any()
+    assert (np.asarray(plain.found) != np.asarray(want.found)).any()
+    active = np.asarray(want.active).reshape(DEVICES, -1).any(axis=1)
+    assert active.sum() >= 2 and float(np.abs(want_forces.on_master).sum()) > 0
+
+
+@pytest.mark.x64
+def test_gradients_through_shard_map_equal_one_device():
+    # The energy of the split contacts, a psum of each device's part; its
+    # gradient by the slaves (split) and by the master's nodes (replicated).
+    x, surface, mask, node, radius = _scene_with_own_nodes()
+
+    def energy(contact):
+        return jnp.sum(jnp.where(contact.active, contact.gap**2, 0))
+
+    def on_device(x, nodes, mask, node, radius):
+        rule = Pairs(node)
+        contact = all_to_all(x, surface._replace(nodes=nodes), radius=radius, mask=mask, pairs=rule)
+        return jax.lax.psum(energy(contact), "slaves")
+
+    rows = P("slaves")
+    mapped = _shard_map(on_device, (rows, P(), rows, rows, rows), P())
+    # The gradient's program is placed on the mesh: its context, as for any
+    # jit over explicit mesh axes.
+    with jax.set_mesh(_slaves_mesh()):
+        got = jax.jit(jax.grad(mapped, argnums=(0, 1)))(x, surface.nodes, mask, node, radius)
+
+    def one_device(x, nodes):
+        surface_at = surface._replace(nodes=nodes)
+        return energy(all_to_all(x, surface_at, radius=radius, mask=mask, pairs=Pairs(node)))
+
+    want = jax.grad(one_device, argnums=(0, 1))(x, surface.nodes)
+    for g, w in zip(got, want, strict=True):
+        assert float(jnp.abs(w).sum()) > 0
+        np.testing.assert_allclose(g, w, rtol=0, atol=local_atol(np.float64, scale=4.0))
