@@ -160,7 +160,7 @@ def test_the_summary_has_the_keys_a_machinist_reads(coarse_run):
 
     assert REQUIRED <= set(summary)
     # summary.json's keys (cutting.summary's, then the demo's), each documented.
-    keys = [*summary, *cutting_demo.demo_keys(cut, 1.0, 0.25, 1.0)]
+    keys = [*summary, *cutting_demo.demo_keys(cut, 1.0, 1.0)]
     documented = documented_keys()
     assert keys == documented, (
         "docs/simulation.md's table \"The demo's summary.json\" lacks "
