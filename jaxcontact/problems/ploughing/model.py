@@ -93,6 +93,7 @@ def workpiece_mesh(num_nodes: int, material: Elastic, *, dtype=jnp.float32) -> M
     ``bucket_sort``'s culling in blocks of rows wants).
 
     Example:
+      >>> from jaxcontact.sim.materials import STEEL
       >>> mesh = workpiece_mesh(2_000, STEEL)
       >>> mesh.nodes.shape, mesh.triangles.shape
       ((2002, 2), (3780, 3))
