@@ -3,7 +3,7 @@ a cylinder pressed into an elastic block against Hertz.
 
 Three parts, the first two float32, each run as ``jaxcontact demo`` runs it:
 
-1. **Orthogonal cutting** (``jaxcontact.sim.cutting``: AISI 1045, 100 m/min, h = 0.10 mm,
+1. **Orthogonal cutting** (``jaxcontact.problems.cutting``: AISI 1045, 100 m/min, h = 0.10 mm,
    rake 0°, mu = 0.3 up to Zorev's limit of half the shear flow stress, 4 elements through h,
    0.8 mm of travel, mass scaled 400x), then the same cut at half the mass scaling (200x: the
    stable step shorter by sqrt 2, the steps more by as much) and at half the element size
@@ -14,7 +14,7 @@ Three parts, the first two float32, each run as ``jaxcontact demo`` runs it:
    40 % of the steps, N per mm of width), the chip's thickness ratio and shear angle (from
    the chip's geometry), the friction angle (from the forces), beside
 
-   * **Merchant** (``sim.machining``): the shear angle 45 + gamma/2 - beta/2 and the forces
+   * **Merchant** (``cutting.machining``): the shear angle 45 + gamma/2 - beta/2 and the forces
      of the force circle for the friction angle the run gives, with the shear stress
      tau_s = sigma_JC / sqrt 3 at the steady chip's plastic strain and temperature and the
      primary shear zone's strain rate;
@@ -22,17 +22,17 @@ Three parts, the first two float32, each run as ``jaxcontact demo`` runs it:
      down to k_c1.1 = 1500 N/mm² that handbooks span;
    * **mass scaling**: the forces of both runs and their difference;
 
-   and the share of a step spent in contact detection (``cutting.detection_share``: the
+   and the share of a step spent in contact detection (``detection_share``, here: the
    step's two searches alone, 400 steps, over whole steps; the median of 3).
-2. **The ploughing simulation** (``jaxcontact.sim.demo.run_demo``; a tool ploughing elastic
-   steel, 3 m/s, 0.5 mm of travel) at 10^4 and 63,001 nodes, the slaves the workpiece's
-   free outline (the default) and every node: the set-up and the search's sizes on the
-   host, one run to compile (allocating larger sizes if they overflowed), then the whole
+2. **The ploughing simulation** (``jaxcontact.problems.ploughing.demo.run_demo``; a tool
+   ploughing elastic steel, 3 m/s, 0.5 mm of travel) at 10^4 and 63,001 nodes, the slaves
+   the workpiece's free outline (the default) and every node: the set-up and the search's sizes
+   on the host, one run to compile (allocating larger sizes if they overflowed), then the whole
    ``lax.scan`` timed ``--repeats`` times beside the same scan with detection replaced by a
-   fixed contact result (``run(..., detect=False)``: the same elastic update and force
+   fixed contact result (``scan(..., detect=False)``: the same elastic update and force
    assembly, no ``Search.closest``), the two in alternation. The detection share is the
    median over those pairs of ``1 - without / with``.
-3. **Hertz indentation** (``jaxcontact.sim.hertz``, float64): a rigid cylinder (R = 10 mm)
+3. **Hertz indentation** (``jaxcontact.problems.hertz``, float64): a rigid cylinder (R = 10 mm)
    pressed with P = 1,000 N/mm into an elastic steel block (E = 210 GPa, nu = 0.3), plane
    strain, frictionless, solved to equilibrium by Newton-CG at 12, 24 and 48 elements across
    Hertz's contact width 2a (``--quick``: 12 and 24), against Hertz's line contact (Johnson,
@@ -62,6 +62,7 @@ each mesh over Hertz's, and the errors against the element size.
 from __future__ import annotations
 
 import dataclasses
+import math
 import pathlib
 import sys
 import time
@@ -69,11 +70,12 @@ import time
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))  # the repo root: benchmarks.*
 
 import jax
+import jax.numpy as jnp
 import numpy as np
 
 from benchmarks.harness import _run, report, style
-from jaxcontact.sim import cutting, hertz
-from jaxcontact.sim.demo import run_demo
+from jaxcontact.problems import cutting, hertz
+from jaxcontact.problems.ploughing.demo import run_demo
 
 TITLE = "Simulations: orthogonal cutting, ploughing, a cylinder against Hertz"
 POINTS = 300  # a force trace's points in the record: means over as many equal runs of steps
@@ -181,13 +183,54 @@ def summarise(
     return summary
 
 
+def _detect(model, state, rake, steps: int):
+    """The cut's step's two searches alone (``cutting.contacts``), ``steps`` times on
+    ``state``'s configuration nudged each time (so that no search is hoisted out of the loop)."""
+    x0 = state.body.x
+    kept = cutting.held(model.mesh, state.alive)
+    lowest_x = cutting.tool_position(model.cut, model.start_x, state.step)
+
+    def body(carry, k):
+        x = x0 + (k * 1e-9).astype(x0.dtype)
+        _, on_tool, tool_state, _, _, on_own, own_state = cutting.contacts(
+            model, *carry, x, lowest_x, rake, state.released, state.alive, kept
+        )
+        return (tool_state, own_state), on_tool.gap.sum() + on_own.gap.sum()
+
+    ks = jnp.arange(steps, dtype=x0.dtype)
+    return jax.lax.scan(body, (state.tool, state.own), ks)
+
+
+_detect_jit = jax.jit(_detect, static_argnums=3)
+
+
+def detection_share(model, state, rake_deg: float, mu: float, steps: int = 400, repeats: int = 3):
+    """The share of a cut's step spent in contact detection: the time of the two
+    searches alone over the time of whole steps (``cutting.advance``), each ``steps``
+    long from ``state`` (compiled first, then the median of ``repeats`` alternated runs)."""
+    dtype = jnp.dtype(model.cut.dtype)
+    rake = jnp.asarray(math.radians(rake_deg), dtype)
+    mu = jnp.asarray(mu, dtype)
+    jax.block_until_ready(cutting.advance(model, state, rake, mu, steps))
+    jax.block_until_ready(_detect_jit(model, state, rake, steps))
+    ratios = []
+    for _ in range(repeats):
+        started = time.perf_counter()
+        jax.block_until_ready(cutting.advance(model, state, rake, mu, steps))
+        whole = time.perf_counter() - started
+        started = time.perf_counter()
+        jax.block_until_ready(_detect_jit(model, state, rake, steps))
+        ratios.append((time.perf_counter() - started) / whole)
+    return float(np.median(ratios))
+
+
 def measure_cut(cut, label: str, series: str, rake: float = 0.0, share: bool = True) -> dict:
     """One cut at ``rake`` (degrees) summarised, with detection's share of a step (``share``)."""
     started = time.perf_counter()
     model, state, record, frames, seconds = cutting.run(cut, rake, cutting.MU)
     summary = summarise(model, state, record, frames, seconds, label, series, rake)
     if share:
-        summary["detection_share"] = cutting.detection_share(model, state, rake, cutting.MU)
+        summary["detection_share"] = detection_share(model, state, rake, cutting.MU)
         summary["detection_percent"] = 100 * summary["detection_share"]
     summary["wall_s"] = time.perf_counter() - started
     print(
@@ -370,9 +413,9 @@ def _timed(call):
 def measure_hertz(across: int, problem: hertz.Indentation = hertz.NOMINAL) -> dict:
     """One mesh: the solve against Hertz, ``jax.grad`` of the FE p0 against Hertz's
     derivatives and a central difference, each timed with its compilation and again."""
-    result, first_s = _timed(lambda: hertz.solve(problem, across))
-    _, solve_s = _timed(lambda: hertz.solve(problem, across))
-    block = hertz.block(problem, across)
+    result, first_s = _timed(lambda: hertz.run(problem, across))
+    _, solve_s = _timed(lambda: hertz.run(problem, across))
+    block = hertz.setup(problem, across)
     gradient = jax.jit(jax.value_and_grad(hertz.peak_pressure, argnums=1))
     (_, grads), gradient_first_s = _timed(lambda: gradient(block, problem))
     _, gradient_s = _timed(lambda: gradient(block, problem))

@@ -1,15 +1,15 @@
 """The ``jaxcontact`` command line.
 
 ``jaxcontact demo`` runs the orthogonal cutting simulation
-(``jaxcontact.sim.cutting_demo``: a chip forms; it prints the summary and
+(``jaxcontact.problems.cutting.demo``: a chip forms; it prints the summary and
 writes summary.json, chip.png, forces.png and chip.gif);
 ``jaxcontact demo --scene ploughing`` runs the ploughing simulation
-(``jaxcontact.sim.demo``); ``jaxcontact demo --scene paper`` runs the source
+(``jaxcontact.problems.ploughing.demo``); ``jaxcontact demo --scene paper`` runs the source
 paper's scene (the repository's docs/scenes.md, Test 1) through both
 exhaustive detectors (``all_to_all``, ``swept``), prints what they found and
 how long they took, and draws the scene near the tool tip; ``jaxcontact demo
 --scene hertz`` presses a rigid cylinder into an elastic block
-(``jaxcontact.sim.hertz``), prints a and p0 against Hertz's and draws the
+(``jaxcontact.problems.hertz.demo``), prints a and p0 against Hertz's and draws the
 pressure. An option of one scene given with another is refused. ``jaxcontact bench`` times
 jaxcontact's own forms on the reference scenes (``jaxcontact._selftime``);
 the comparisons with other libraries are the repository's ``benchmarks/``
@@ -20,19 +20,18 @@ from __future__ import annotations
 
 import argparse
 import functools
-import os
 import sys
-import time
 
 import jax
 import numpy as np
 
 from jaxcontact import _selftime, all_to_all, swept
 from jaxcontact._timing import pinned_note, time_call
+from jaxcontact.problems._output import write_png
+from jaxcontact.problems.cutting import demo as _cutting_demo
+from jaxcontact.problems.hertz import demo as _hertz_demo
+from jaxcontact.problems.ploughing import demo as _demo_sim
 from jaxcontact.scenes import paper_scene
-from jaxcontact.sim import cutting_demo as _cutting_demo
-from jaxcontact.sim import demo as _demo_sim
-from jaxcontact.sim import hertz as _hertz
 
 # Drawn around the tool tip T = (50.9, 7): the rake and clearance faces, the
 # nodes pushed into them and the paths that cross them all fall inside.
@@ -40,8 +39,6 @@ _ZOOM_X = (45.0, 56.0)
 _ZOOM_Y = (5.5, 11.5)
 # One drawn path per this many crossed nodes: every path would fill the band solid.
 _PATH_STRIDE = 12
-# --scene hertz's mesh: elements across the contact width 2a.
-HERTZ_ACROSS = 24
 
 
 def _demo(args: argparse.Namespace) -> int:
@@ -50,7 +47,7 @@ def _demo(args: argparse.Namespace) -> int:
     if args.scene == "ploughing":
         return _demo_sim.main(args)
     if args.scene == "hertz":
-        return _hertz_demo(args)
+        return _hertz_demo.main(args)
     if args.dtype == "float64":
         jax.config.update("jax_enable_x64", True)
     scene = paper_scene(args.n, length=10.0, d=5.0, dtype=np.dtype(args.dtype))
@@ -77,25 +74,10 @@ def _demo(args: argparse.Namespace) -> int:
             f"(p10 {timing.p10_s * 1e3:.3f}, p90 {timing.p90_s * 1e3:.3f})"
         )
 
-    _write_png(
+    write_png(
         args.out, f"paper_scene_n{args.n}.png", lambda path: _draw(scene, contact, crossing, path)
     )
     return 0
-
-
-def _write_png(folder: str, name: str, draw) -> None:
-    """``draw(path)`` into ``folder/name`` with matplotlib set to draw with no display,
-    and says where; without matplotlib, says why the PNG is skipped."""
-    try:
-        import matplotlib
-    except ImportError:
-        print('PNG skipped: matplotlib is not installed (pip install "jaxcontact[bench]").')
-        return
-    matplotlib.use("Agg")  # headless: no display needed
-    os.makedirs(folder, exist_ok=True)
-    path = os.path.join(folder, name)
-    draw(path)
-    print(f"wrote {path}")
 
 
 def _draw(scene, contact, crossing, path: str) -> None:
@@ -159,89 +141,6 @@ def _draw(scene, contact, crossing, path: str) -> None:
     paths.set_xlabel("x (mm)")
     figure.suptitle(
         f"Paper scene, Test 1: {x.shape[0]:,} nodes, face length 10, d = 5 (near the tool tip)"
-    )
-    figure.savefig(path)
-    plt.close(figure)
-
-
-def _hertz_demo(args: argparse.Namespace) -> int:
-    """Solves the indentation at ``--across`` elements across the contact, prints the FE
-    a and p0 against Hertz's, and draws the pressure profile."""
-    jax.config.update("jax_enable_x64", True)  # the scene needs float64 (hertz.solve says why)
-    problem = _hertz.Indentation()
-    started = time.perf_counter()
-    result = _hertz.solve(problem, args.across)
-    first_s = time.perf_counter() - started
-    started = time.perf_counter()
-    _hertz.solve(problem, args.across)  # compiled: the solve alone
-    solve_s = time.perf_counter() - started
-    exact = result.exact
-    print(
-        f"hertz: rigid cylinder R={problem.radius:g} mm pressed with P={problem.force:g} N/mm "
-        f"into a block E={problem.young:g} MPa, nu={problem.poisson:g} (plane strain, "
-        "frictionless, float64)"
-    )
-    print(
-        f"block 20a x 10a, bottom fixed, sides free: {result.nodes:,} nodes, "
-        f"{result.across} elements across 2a (h = {result.element:.4g} mm = "
-        f"{result.element / exact.half_width:.3g} a); penalty "
-        f"{_hertz.Solver().penalty:g} E*/h"
-    )
-    print(f"jax {jax.__version__} on {jax.devices()[0].device_kind}; {pinned_note()}")
-    print("                 FE          Hertz       error")
-    print(
-        f"  a (mm)        {result.half_width:<11.5g} {exact.half_width:<11.5g} "
-        f"{100 * result.half_width_error:+.2f} %"
-    )
-    print(
-        f"  p0 (MPa)      {result.peak:<11.5g} {exact.peak:<11.5g} {100 * result.peak_error:+.2f} %"
-    )
-    print(f"  p(x), relative L2 error over the contact: {100 * result.l2_error:.2f} %")
-    print(
-        f"  {result.active} nodes pressed; deepest penetration "
-        f"{result.penetration / exact.half_width:.2g} a; contact force {result.force:.6g} N/mm"
-    )
-    print(
-        f"  Newton: {result.newton_steps} steps, force residual {result.residual:.2g} N/mm; "
-        f"{first_s:.1f} s with compilation, {solve_s:.2f} s compiled"
-    )
-    _write_png(
-        args.out, f"hertz_pressure_{result.across}.png", lambda path: _draw_hertz(result, path)
-    )
-    return 0
-
-
-def _draw_hertz(result, path: str) -> None:
-    """The FE nodal pressures over Hertz's p(x), and their difference, into ``path``."""
-    import matplotlib.pyplot as plt
-
-    exact = result.exact
-    a, p0 = exact.half_width, exact.peak
-    shown = np.abs(result.x) <= 1.5 * a
-    x = result.x[shown] / a
-    curve = np.linspace(-1.5, 1.5, 601)
-    figure, (profile, difference) = plt.subplots(
-        2, 1, figsize=(8, 7), dpi=150, sharex=True, height_ratios=(3, 1.3), layout="constrained"
-    )
-    profile.plot(curve, exact.pressure(curve * a) / p0, c="black", lw=1.2, label="Hertz p(x)")
-    profile.plot(x, result.pressure[shown] / p0, "o", c="tab:blue", ms=4, label="FE nodal pressure")
-    profile.set(ylabel="p / p0 (Hertz's)", ylim=(0, 1.15))
-    profile.legend(loc="upper right", fontsize=8)
-    profile.set_title(
-        f"{result.across} elements across 2a: a {100 * result.half_width_error:+.2f} %, "
-        f"p0 {100 * result.peak_error:+.2f} %, L2 {100 * result.l2_error:.2f} %",
-        fontsize=10,
-    )
-    error = (result.pressure[shown] - exact.pressure(result.x[shown])) / p0
-    difference.axhline(0, c="black", lw=0.8)
-    difference.plot(x, error, "o-", c="tab:blue", ms=3, lw=0.8)
-    difference.set(xlabel="x / a (Hertz's a)", ylabel="(FE - Hertz) / p0")
-    problem = result.problem
-    figure.suptitle(
-        f"Rigid cylinder (R = {problem.radius:g} mm, P = {problem.force:g} N/mm) on an elastic "
-        f"block (E = {problem.young:g} MPa, ν = {problem.poisson:g}):\n"
-        "the contact pressure against Hertz's (Johnson 1985, §4.3), plane strain",
-        fontsize=10,
     )
     figure.savefig(path)
     plt.close(figure)
@@ -331,8 +230,8 @@ def _parser() -> argparse.ArgumentParser:
     hertz.add_argument(
         "--across",
         type=_at_least_two,
-        default=HERTZ_ACROSS,
-        help=f"elements across the contact width 2a (default {HERTZ_ACROSS})",
+        default=_hertz_demo.ACROSS,
+        help=f"elements across the contact width 2a (default {_hertz_demo.ACROSS})",
     )
     scenes = {"--travel": ("travel", None, ("cutting", "ploughing"))}
     groups = (("cutting", cutting), ("ploughing", ploughing), ("paper", paper), ("hertz", hertz))

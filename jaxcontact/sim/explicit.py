@@ -17,13 +17,12 @@ viscosity damps the ringing of shocks. The material is any
 
 from __future__ import annotations
 
-import warnings
 from typing import NamedTuple
 
 import jax.numpy as jnp
 from jax import Array
 
-from jaxcontact.sim import materials
+from jaxcontact.sim import _removed, materials
 from jaxcontact.sim.elements import q4
 
 
@@ -74,12 +73,10 @@ def step(
     external: Array,
     dt,
     boundary: Boundary | None = None,
-    *old,
+    *,
     alive: Array | None = None,
     viscosity: tuple[float, float] | None = None,
-    fixed: Array | None = None,
-    velocity: Array | None = None,
-    partner: Array | None = None,
+    **removed,
 ) -> tuple[Body, Array]:
     """One explicit step under the ``external`` nodal forces (f[N, 2], N per mm).
 
@@ -94,40 +91,22 @@ def step(
         stress and keeps its state. None: all.
       viscosity: ``(linear, quadratic)`` bulk viscosity coefficients
         (``q4.bulk_viscosity``; LS-DYNA's defaults are 0.06 and 1.5). None: none.
-      fixed: deprecated: ``Boundary(fixed=...)``.
-      velocity: deprecated: ``Boundary(velocity=...)``.
-      partner: deprecated: ``Boundary(ties=...)``.
-      *old: deprecated: 1.1's positional ``fixed, velocity, partner, alive,
-        viscosity`` (a ``fixed`` array in ``boundary``'s place).
+      **removed: none taken: a keyword this function no longer takes
+        (``fixed=``, ``velocity=``, ``partner=``) raises a ``TypeError`` that
+        names what replaces it.
 
     Returns:
       The new ``Body`` and the step's plastic strain increments (f[E, 4]).
     """
-    if old or not (boundary is None or isinstance(boundary, Boundary)):
-        # 1.1's positional order: fixed, velocity, partner, alive, viscosity.
-        named = dict(zip(("velocity", "partner", "alive", "viscosity"), old, strict=False))
-        if len(old) > 4 or isinstance(boundary, Boundary):
-            raise TypeError(
-                "explicit.step takes (material, quads, body, external, dt, boundary) "
-                f"positionally, then keywords; got {6 + len(old)} positional arguments"
-            )
-        fixed, boundary = boundary, None
-        velocity = named.get("velocity", velocity)
-        partner = named.get("partner", partner)
-        alive = named.get("alive", alive)
-        viscosity = named.get("viscosity", viscosity)
-    boundary = Boundary() if boundary is None else boundary
-    if fixed is not None or velocity is not None or partner is not None:
-        warnings.warn(
-            "explicit.step's fixed=, velocity= and partner= are deprecated: pass "
-            "boundary=explicit.Boundary(fixed, velocity, ties)",
-            DeprecationWarning,
-            stacklevel=2,
-        )
-        boundary = Boundary(
-            boundary.fixed if fixed is None else fixed,
-            boundary.velocity if velocity is None else velocity,
-            boundary.ties if partner is None else partner,
+    if removed:
+        _removed.refuse("explicit.step", removed)
+    if boundary is None:
+        boundary = Boundary()
+    elif not isinstance(boundary, Boundary):
+        # An array here is a ``fixed`` passed where the boundary goes.
+        raise TypeError(
+            "explicit.step's boundary must be an explicit.Boundary (fixed, velocity, ties) "
+            f"or None; got {type(boundary).__name__}"
         )
     if boundary.velocity is not None and boundary.fixed is None:
         raise ValueError(

@@ -1,9 +1,9 @@
 """benchmarks/simulations.py: its record and figure from hand-built runs, and the cutting
-summary it records from the coarse cut tests/sim/test_cutting.py runs.
+summary it records from the coarse cut tests/problems/test_cutting.py runs.
 
 Nothing is timed and no full simulation is run: the suite's measurements are
-``cutting.run``, ``cutting.summary``, ``cutting.detection_share``, ``demo.run_demo`` and
-``hertz.solve``, which tests/sim tests; here are tested what the suite adds (the force
+``cutting.run``, ``cutting.summary``, ``simulations.detection_share``, ``demo.run_demo`` and
+``hertz.run``, which tests/problems tests; here are tested what the suite adds (the force
 trace, the tables, the notes, the figure).
 """
 
@@ -15,9 +15,9 @@ import pytest
 from benchmarks import simulations
 from benchmarks.harness import report, style
 from jaxcontact._timing import Timing
-from jaxcontact.sim import cutting
-from jaxcontact.sim.demo import Summary
-from tests.sim.test_cutting import COARSE
+from jaxcontact.problems import cutting
+from jaxcontact.problems.ploughing.demo import Summary
+from tests.problems.test_cutting import COARSE
 
 
 def test_the_trace_is_means_over_equal_runs_of_steps():
@@ -217,7 +217,7 @@ def test_a_record_without_the_hertz_part_draws_as_before():
 
 @pytest.mark.slow
 def test_the_recorded_summary_of_the_coarse_cut():
-    # The run tests/sim/test_cutting.py's coarse_run makes (compiled once per process).
+    # The run tests/problems/test_cutting.py's coarse_run makes (compiled once per process).
     cut = cutting.Cutting(travel=0.25, **COARSE)
     model, state, found, frames, seconds = cutting.run(cut, 0.0, cutting.MU, chunks=5)
     summary = simulations.summarise(model, state, found, frames, seconds, "coarse", "series")

@@ -4,7 +4,6 @@ protocol, and the 0.7.5 names that now forward to them with a warning."""
 from __future__ import annotations
 
 import math
-import warnings
 
 import jax
 import jax.numpy as jnp
@@ -13,8 +12,8 @@ import pytest
 
 import jaxcontact
 from jaxcontact.sim import coupling, explicit, materials, tools
-from jaxcontact.sim.elements import q4, triangle
-from tests.tolerances import FLOAT32_ATOL, FLOAT64_EXACT_ATOL, FLOAT64_RTOL
+from jaxcontact.sim.elements import q4
+from tests.tolerances import FLOAT32_ATOL, FLOAT64_RTOL
 
 TOOL_FIELDS = {"edge_radius": 0.05, "clearance": 7.0, "rake_face": 1.0, "flank": 0.5}
 TOOL = tools.Tool(**TOOL_FIELDS, arc_segments=12)
@@ -149,86 +148,47 @@ def test_mass_scaling_slows_the_waves_and_leaves_the_heating_alone():
     np.testing.assert_array_equal(np.asarray(hot.temperature), np.asarray(cold.temperature))
 
 
-def test_the_replaced_names_warn_naming_their_replacement_and_still_work():
-    import jaxcontact.sim as sim
-    from jaxcontact.sim import cutting, elastic, plasticity, ploughing, solid, tool
+def _removed_cases():
+    from jaxcontact.problems.cutting import _removed as cutting_removed
+    from jaxcontact.sim import _removed as sim_removed
 
-    cases = [
-        (lambda: sim.Material(), "jaxcontact.sim.materials.Elastic"),
-        (lambda: sim.Mesh, "jaxcontact.sim.elements.triangle.Mesh"),
-        (lambda: sim.run, "jaxcontact.sim.ploughing.run"),
-        (lambda: ploughing(300, travel=0.1), "jaxcontact.sim.ploughing.setup"),
-        (lambda: plasticity.JohnsonCook(), "jaxcontact.sim.materials.AISI_1045"),
-        (lambda: plasticity.PointState, "jaxcontact.sim.materials.PointState"),
-        (lambda: solid.grid_mesh, "jaxcontact.sim.elements.q4.grid_mesh"),
-        (lambda: elastic.Material, "jaxcontact.sim.materials.Elastic"),
-        (lambda: elastic.triangle_mesh, "jaxcontact.sim.elements.triangle.triangle_mesh"),
-        (lambda: tool.tool_outline, "jaxcontact.sim.ploughing.tool_outline"),
-        (lambda: cutting.STEEL, "jaxcontact.sim.materials.AISI_1045"),
+    return [("jaxcontact.sim", name, entry) for name, entry in sim_removed.REMOVED.items()] + [
+        ("jaxcontact.problems.cutting", name, entry)
+        for name, entry in cutting_removed.REMOVED.items()
     ]
-    for old, replacement in cases:
-        with pytest.warns(DeprecationWarning, match=replacement):
-            old()
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", DeprecationWarning)
-        assert plasticity.JohnsonCook() == materials.AISI_1045
-        assert plasticity.JohnsonCook(A=600.0).A == 600.0
-        assert sim.Material(young=1.0) == materials.Elastic(young=1.0)
-        assert solid.grid_mesh is q4.grid_mesh and elastic.stresses is triangle.stresses
-        mesh, _, config = ploughing(300, travel=0.1)
-        assert config.steps == ploughing.setup(300, travel=0.1)[2].steps
-        state = materials.PointState.at_rest((), materials.AISI_1045)
-        new, plastic = plasticity.update(
-            materials.AISI_1045, state, jnp.asarray([0.01, -0.01, 0.0]), 1e-6
-        )
-        assert float(plastic) > 0
-    with pytest.raises(AttributeError, match="no attribute 'nothing'"):
-        _ = solid.nothing
 
 
-def test_more_replaced_names_warn_and_keep_their_meaning():
-    from jaxcontact.sim import cutting, hertz, plasticity, ploughing, tool
+@pytest.mark.parametrize(("package", "name", "entry"), _removed_cases(), ids=lambda v: str(v))
+def test_every_removed_name_raises_naming_its_replacement(package, name, entry):
+    import importlib
 
-    with pytest.warns(DeprecationWarning, match=r"ploughing\.SCENE_TOOL\.arc_segments"):
-        assert tool.ARC_SEGMENTS == ploughing.SCENE_TOOL.arc_segments
-    with pytest.warns(DeprecationWarning, match=r"ploughing\.SCENE_TOOL\.edge_radius"):
-        assert tool.EDGE_RADIUS == ploughing.SCENE_TOOL.edge_radius
-    with pytest.warns(DeprecationWarning, match=r"jaxcontact\.sim\.ploughing\.setup"):
-        assert ploughing.ploughing is ploughing.setup
-    with pytest.warns(DeprecationWarning, match=r"materials\.Elastic"):
-        assert hertz.Material is materials.Elastic
-    # 1.1's Cutting.material was the mass-scaled steel: it still is.
-    cut = cutting.Cutting(mass_scaling=100.0)
-    with pytest.warns(DeprecationWarning, match=r"Cutting\.scaled"):
-        assert cut.material == cut.scaled == materials.AISI_1045._replace(mass_scale=100.0)
-    assert isinstance(materials.AISI_1045, plasticity.JohnsonCook)
-    with pytest.raises(ValueError, match="work_material must be a materials.JohnsonCook"):
-        cutting.Cutting(work_material=materials.STEEL)
-
-
-def test_a_module_called_as_its_old_function_warns_at_the_callers_line():
-    from jaxcontact.sim import ploughing
-
-    with pytest.warns(DeprecationWarning) as caught:
-        ploughing(300, travel=0.1)
-    assert caught[0].filename == __file__
+    replacement, deprecated, removed = entry
+    assert (deprecated, removed) in (("1.2", "2.0"), ("2.0", "2.0"))
+    expected = f"{package}.{name} was removed in 2.0: use {replacement}"
+    module = importlib.import_module(package)
+    if "(" in name:  # a keyword a function no longer takes
+        function, keyword = name[:-2].split("(")
+        owner, _, attribute = function.rpartition(".")
+        call = getattr(importlib.import_module(f"{package}.{owner}"), attribute)
+        with pytest.raises(TypeError) as raised:
+            call(None, None, None, None, None, **{keyword: None})
+    else:
+        owner, _, attribute = name.rpartition(".")
+        target = getattr(module, owner)() if owner else module
+        with pytest.raises(AttributeError) as raised:
+            getattr(target, attribute)
+    assert str(raised.value) == expected
 
 
-@pytest.mark.x64
-def test_the_old_explicit_keywords_warn_and_give_the_boundarys_step():
-    material = materials.AISI_1045
-    quads = q4.grid_mesh(1.0, 1.0, 1, 1, material.density, jnp.float64)
-    body = explicit.at_rest(quads, material)
-    push = jnp.zeros((4, 2)).at[2].set([1.0, 0.0])
-    fixed = jnp.zeros((4, 2), bool).at[0].set(True)
-    new, _ = explicit.step(material, quads, body, push, 1e-8, explicit.Boundary(fixed=fixed))
-    with pytest.warns(DeprecationWarning, match=r"explicit\.Boundary"):
-        old, _ = explicit.step(material, quads, body, push, 1e-8, fixed=fixed)
-    np.testing.assert_allclose(np.asarray(old.x), np.asarray(new.x), atol=FLOAT64_EXACT_ATOL)
-    # 1.1's positional order: fixed, velocity, partner, alive.
-    alive = jnp.ones(1, bool)
-    with pytest.warns(DeprecationWarning, match=r"explicit\.Boundary"):
-        old, _ = explicit.step(material, quads, body, push, 1e-8, fixed, None, None, alive)
-    np.testing.assert_allclose(np.asarray(old.x), np.asarray(new.x), atol=FLOAT64_EXACT_ATOL)
-    with pytest.raises(ValueError, match="velocity with fixed=None"):
-        explicit.step(material, quads, body, push, 1e-8, explicit.Boundary(velocity=push))
+def test_a_fixed_array_where_the_boundary_goes_is_refused():
+    with pytest.raises(TypeError, match=r"boundary must be an explicit\.Boundary"):
+        explicit.step(None, None, None, None, None, np.zeros((2, 2), bool))
+
+
+def test_an_unknown_name_is_an_ordinary_attribute_error():
+    import jaxcontact.sim as sim
+
+    with pytest.raises(AttributeError, match="has no attribute 'nothing'"):
+        sim.nothing  # noqa: B018
+    with pytest.raises(TypeError, match="unexpected keyword argument 'nothing'"):
+        explicit.step(None, None, None, None, None, nothing=1)

@@ -1,7 +1,6 @@
 """``jaxcontact demo`` (``--scene cutting``, the default): the orthogonal cut, run and drawn.
 
-Runs ``cutting.run`` with a progress bar on stderr, times contact
-detection's share of a step (``cutting.detection_share``), prints the
+Runs ``cutting.run`` with a progress bar on stderr, prints the
 summary (``cutting.summary``) as a table and writes it to
 ``OUT/summary.json``. With matplotlib installed (the ``bench`` extra) it
 also draws ``OUT/chip.png`` (the chip at the end, by plastic strain and by
@@ -35,7 +34,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxcontact.sim import cutting, machining
+from jaxcontact.problems import cutting
+from jaxcontact.problems.cutting import machining
 
 _DEFAULT = cutting.Cutting()  # the default cut: the options' defaults are its numbers
 TRAVEL = _DEFAULT.travel  # mm, the default tool travel
@@ -294,14 +294,13 @@ def _conditions(cut: cutting.Cutting, rake_deg: float, mu: float) -> str:
     return f"v = {cut.speed:g} m/min, h = {cut.uncut:g} mm, rake {rake_deg:g}°, μ = {mu:g}"
 
 
-def demo_keys(cut: cutting.Cutting, rate: float, share: float, seconds: float) -> dict:
+def demo_keys(cut: cutting.Cutting, rate: float, seconds: float) -> dict:
     """What summary.json holds beyond ``cutting.summary``: the run's steps per second
-    after the first chunk (``rate``), detection's share of a step, the cut's travel
+    after the first chunk (``rate``), the cut's travel
     (mm, as asked; the run's last step reaches it to within a step's motion), element
     (mm) and dtype, and the run's seconds."""
     return {
         "steps_per_second_after_compile": rate,
-        "detection_share": share,
         "travel_mm": cut.travel,
         "element_mm": cut.element,
         "dtype": cut.dtype,
@@ -326,21 +325,17 @@ def main(args: argparse.Namespace) -> int:
         f"{cut.steps:,} steps of dt = {cut.dt:.3g} s"
     )
     print(f"jax {jax.__version__} on {jax.devices()[0].device_kind}", flush=True)
-    chunk = math.ceil(cut.steps / args.frames)
     progress = _Progress()
     progress(0, cut.steps)
     model, state, record, frames, seconds = cutting.run(
         cut, args.rake, args.mu, chunks=args.frames, progress=progress
     )
-    print("timing contact detection's share of a step ...", file=sys.stderr, flush=True)
-    # A chunk's length: the scan compiled for the run is the one it times.
-    share = cutting.detection_share(model, state, args.rake, args.mu, steps=chunk)
     with warnings.catch_warnings():
         # A cut too short for a steady chip measures none: NaN, and NumPy's
         # warnings about the empty means behind it.
         warnings.simplefilter("ignore", RuntimeWarning)
         summary = cutting.summary(model, state, record, frames, seconds, args.rake, args.mu)
-    summary.update(demo_keys(cut, progress.rate(), share, seconds))
+    summary.update(demo_keys(cut, progress.rate(), seconds))
     print_table(summary)
     print(f"  forces: {window_note(summary)}")
     print(f"  {dips_note(summary, cut.element, cut.element_steps)}")

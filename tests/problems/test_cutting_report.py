@@ -13,7 +13,8 @@ import types
 import numpy as np
 import pytest
 
-from jaxcontact.sim import cutting, cutting_demo
+from jaxcontact.problems import cutting
+from jaxcontact.problems.cutting import demo as cutting_demo
 from tests.tolerances import STEADY_FIT_RTOL
 
 ROWS = 6000  # rows of a synthetic history: 0.6 mm of travel

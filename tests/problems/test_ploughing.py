@@ -14,9 +14,16 @@ import numpy as np
 import pytest
 
 from jaxcontact import _cli
+from jaxcontact.problems.ploughing import (
+    Ploughing,
+    mean_cutting_force,
+    scan,
+    setup,
+    simulate,
+    tool_outline,
+)
+from jaxcontact.problems.ploughing.demo import run_demo
 from jaxcontact.scenes import cutting_tool_outline
-from jaxcontact.sim.demo import run_demo
-from jaxcontact.sim.ploughing import mean_cutting_force, run, setup, simulate, tool_outline
 from tests.tolerances import FLOAT64_RTOL, FLOAT64_STEPS_RTOL, RERUN_ATOL
 
 pytestmark = [pytest.mark.simulation, pytest.mark.slow, pytest.mark.x64]
@@ -30,8 +37,8 @@ GRADIENT_RTOL = 1e-6
 
 @pytest.fixture(scope="module")
 def small():
-    mesh, controls, config = setup(3_000, travel=0.2, dtype=jnp.float64)
-    final, history = run(mesh, controls, config)
+    mesh, controls, config = setup(Ploughing(3_000, travel=0.2, dtype="float64"))
+    final, history = scan(mesh, controls, config)
     return mesh, controls, config, final, jax.tree.map(np.asarray, history)
 
 
@@ -111,13 +118,13 @@ def test_reuse_surface_slaves_and_growing_sizes_change_nothing(small):
     # after the run and ``simulate`` grows. The same forces: reusing lists,
     # taking only surface slaves and growing the sizes miss nothing here.
     mesh, controls, config, _, history = small
-    _, _, every_node = setup(3_000, travel=0.2, dtype=jnp.float64, slaves="all")
+    _, _, every_node = setup(Ploughing(3_000, travel=0.2, dtype="float64", slaves="all"))
     cramped = dataclasses.replace(
         every_node,
         search=dataclasses.replace(every_node.search, method="binned"),
         sizes=dataclasses.replace(every_node.sizes, use_cells=True, block_size=8, block_capacity=1),
     )
-    assert bool(run(mesh, controls, cramped)[0].overflow)
+    assert bool(scan(mesh, controls, cramped)[0].overflow)
     final, history_again, held = simulate(mesh, controls, cramped)
     assert not bool(final.overflow) and held.sizes.block_capacity > 1 and held.sizes.use_cells
     # Found again only every few steps, and the count is the flags'.
@@ -136,12 +143,12 @@ def test_gradient_matches_central_differences(small):
     # gap is continuous across a change of segment. A change of segment does
     # turn the normal, so the check also asserts the contact history is the
     # same at p - h and p + h: then the difference quotient is that piece's.
-    mesh, controls, config, *_ = small
-    value, grads = jax.value_and_grad(mean_cutting_force, argnums=1)(mesh, controls, config)
+    mesh, controls, plan, *_ = small
+    value, grads = jax.value_and_grad(mean_cutting_force, argnums=1)(mesh, controls, plan)
     assert value > 0
     for name, step in (("rake", 1e-5), ("stiffness", 1e-5 * float(controls.stiffness))):
         runs = [
-            run(mesh, controls._replace(**{name: getattr(controls, name) + sign * step}), config)[1]
+            scan(mesh, controls._replace(**{name: getattr(controls, name) + sign * step}), plan)[1]
             for sign in (1, -1)
         ]
         np.testing.assert_array_equal(runs[0].signature, runs[1].signature)

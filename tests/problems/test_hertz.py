@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from jaxcontact import _cli
-from jaxcontact.sim import hertz
+from jaxcontact.problems import hertz
 from jaxcontact.sim.elements.triangle import internal_forces, strain_energy
 from jaxcontact.sim.materials import Elastic
 from tests.tolerances import (
@@ -38,7 +38,7 @@ OTHER = hertz.Indentation(radius=25.0, force=300.0, young=70_000.0, poisson=0.33
 
 @pytest.fixture(scope="module")
 def small():
-    return hertz.solve(hertz.Indentation(), SMALL)
+    return hertz.run(hertz.Indentation(), SMALL)
 
 
 @pytest.mark.parametrize("problem", [hertz.Indentation(), OTHER])
@@ -64,7 +64,7 @@ def test_hertz_is_johnsons_line_contact(problem):
 def test_the_block_is_graded_towards_the_contact():
     problem = hertz.Indentation()
     a = hertz.hertz(problem).half_width
-    block = hertz.block(problem, SMALL, growth=1.25)
+    block = hertz.setup(problem, SMALL, growth=1.25)
     nodes = np.asarray(block.mesh.nodes)
     x = nodes[np.asarray(block.top), 0]
     h = float(block.element)
@@ -91,7 +91,7 @@ def test_the_block_is_graded_towards_the_contact():
 
 
 def test_strain_energy_is_the_internal_forces_potential():
-    block = hertz.block(hertz.Indentation(), 4)
+    block = hertz.setup(hertz.Indentation(), 4)
     material = Elastic(young=70_000.0, poisson=0.33)
     u = 1e-3 * jax.random.normal(jax.random.key(0), block.mesh.nodes.shape, jnp.float64)
     forces = -jax.grad(strain_energy, argnums=1)(block.mesh, u, material)
@@ -123,7 +123,7 @@ def test_the_small_mesh_meets_hertz(small):
 @pytest.mark.slow
 def test_the_peak_pressures_gradient(small):
     problem = hertz.Indentation()
-    block = hertz.block(problem, SMALL)
+    block = hertz.setup(problem, SMALL)
     value, grads = jax.value_and_grad(hertz.peak_pressure, argnums=1)(block, problem)
     # Another program (the forward pass of the gradient's) through the same Newton steps.
     assert float(value) == pytest.approx(small.peak, rel=FLOAT64_STEPS_RTOL)
@@ -150,13 +150,13 @@ def test_the_peak_pressures_gradient(small):
         (lambda: hertz.hertz(hertz.Indentation(young=-1.0)), "problem.young must be"),
         (lambda: hertz.hertz(hertz.Indentation(poisson=0.5)), "problem.poisson must be in"),
         (lambda: hertz.hertz((10.0, 1e3, 2e5, 0.3)), "problem must be an Indentation; got tuple"),
-        (lambda: hertz.solve(across=1), "across must be an integer >= 2; got 1"),
-        (lambda: hertz.solve(across=12.0), "across must be an integer >= 2; got 12.0"),
-        (lambda: hertz.solve(width=6.0), "width must be a finite number > 6"),
-        (lambda: hertz.solve(depth=1.0), "depth must be a finite number > 1.5"),
-        (lambda: hertz.block(growth=1.0), "growth must be in (1, 2]; got 1.0"),
-        (lambda: hertz.solve(hertz.Indentation(force=3e5)), "problem must give Hertz's a / R at"),
-        (lambda: hertz.solve(solver="fast"), "solver must be a Solver; got str"),
+        (lambda: hertz.run(across=1), "across must be an integer >= 2; got 1"),
+        (lambda: hertz.run(across=12.0), "across must be an integer >= 2; got 12.0"),
+        (lambda: hertz.run(width=6.0), "width must be a finite number > 6"),
+        (lambda: hertz.run(depth=1.0), "depth must be a finite number > 1.5"),
+        (lambda: hertz.setup(growth=1.0), "growth must be in (1, 2]; got 1.0"),
+        (lambda: hertz.run(hertz.Indentation(force=3e5)), "problem must give Hertz's a / R at"),
+        (lambda: hertz.run(solver="fast"), "solver must be a Solver; got str"),
         (lambda: hertz.Solver(penalty=0.0), "Solver.penalty must be a finite number > 0"),
         (lambda: hertz.Solver(cg_steps=0), "Solver.cg_steps must be an integer >= 1"),
         (lambda: hertz.fit_half_width([0.0, 1.0], [1.0, 0.0]), "pressure must be > 0 at two"),
@@ -169,7 +169,7 @@ def test_bad_input_names_the_argument(call, message):
 
 def test_float32_is_refused():
     with jax.enable_x64(False), pytest.raises(ValueError, match="needs float64"):
-        hertz.solve()
+        hertz.run()
 
 
 @pytest.mark.slow

@@ -6,7 +6,7 @@ import math
 
 import pytest
 
-from jaxcontact.sim import machining
+from jaxcontact.problems.cutting import machining
 from tests.tolerances import FLOAT64_RTOL, HAND_FIGURE_RTOL
 
 
@@ -38,7 +38,7 @@ def test_shear_angle_from_the_chip_ratio(rake):
 
 # The band handbooks span for Ck45 (m_c = 0.14; k_c1.1 from 1,500 to König and
 # Klocke's 2,220 N/mm²) at h = 0.1 mm, worked by hand: 0.1^0.86 = 0.13804, so
-# 207.06 and 306.45 N/mm. tests/sim/test_cutting_demo.py checks that a run's
+# 207.06 and 306.45 N/mm. tests/problems/test_cutting_demo.py checks that a run's
 # summary reports this band.
 KIENZLE_BAND_AT_0_1_MM = (207.06, 306.45)
 

@@ -40,8 +40,6 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
-import sys
-import types
 from typing import NamedTuple
 
 import jax
@@ -51,21 +49,11 @@ from jax import Array
 
 from jaxcontact import Search, Sizes, Surface
 from jaxcontact.forces import penalty
+from jaxcontact.problems.ploughing.config import SCENE_TOOL, TIP_HEIGHT, Ploughing
 from jaxcontact.scenes import grid
 from jaxcontact.sim import tools
-from jaxcontact.sim._moved import deprecated as _deprecated
-from jaxcontact.sim._moved import forward as _forward
 from jaxcontact.sim.elements.triangle import Mesh, internal_forces, smallest_altitude, triangle_mesh
-from jaxcontact.sim.materials import STEEL, Elastic, inertial_density
-
-# Steel with its density scaled by 10^4: the default workpiece (see the module docstring).
-MASS_SCALED_STEEL = STEEL._replace(mass_scale=1e4)
-
-# The cutting scene's tool (docs/scenes.md): a 7° clearance, faces 3 mm from
-# the tip, an edge of radius 0.05 drawn by 16 segments, the tip at height 4
-# (a depth of cut of 1 in a workpiece 5 high).
-SCENE_TOOL = tools.Tool(edge_radius=0.05, clearance=7.0, rake_face=3.0, flank=3.0, arc_segments=16)
-TIP_HEIGHT = 4.0
+from jaxcontact.sim.materials import Elastic, inertial_density
 
 
 @jax.jit
@@ -105,6 +93,7 @@ def workpiece_mesh(num_nodes: int, material: Elastic, *, dtype=jnp.float32) -> M
     ``bucket_sort``'s culling in blocks of rows wants).
 
     Example:
+      >>> from jaxcontact.sim.materials import STEEL
       >>> mesh = workpiece_mesh(2_000, STEEL)
       >>> mesh.nodes.shape, mesh.triangles.shape
       ((2002, 2), (3780, 3))
@@ -134,8 +123,9 @@ class Controls(NamedTuple):
 
 
 @dataclasses.dataclass(frozen=True)
-class Ploughing:
-    """The static set-up of a run (hashable; a change compiles anew).
+class Plan:
+    """The static plan of a run, what ``setup`` makes of a ``Ploughing`` (hashable;
+    a change compiles anew).
 
     Attributes:
       steps: time steps in the run.
@@ -185,71 +175,41 @@ class Final(NamedTuple):
     rebuilds: Array  # i32[]  how often the candidates were found again
 
 
-def setup(
-    num_nodes: int = 10_000,
-    *,
-    travel: float = 0.4,
-    speed: float = 3_000.0,
-    material: Elastic = MASS_SCALED_STEEL,
-    stiffness_factor: float = 10.0,
-    safety: float = 0.5,
-    damping_ratio: float = 0.3,
-    skin_factor: float = 0.5,
-    slack: float = 2.0,
-    rake_degrees: float = 10.0,
-    slaves: str = "surface",
-    dtype=jnp.float32,
-) -> tuple[Mesh, Controls, Ploughing]:
-    """Sets up a run on the host: the mesh, the nominal controls and the static set-up.
+def setup(config: Ploughing) -> tuple[Mesh, Controls, Plan]:
+    """Sets up a run on the host: the mesh, the nominal controls and the static plan.
 
     Args:
-      num_nodes: about this many workpiece nodes (the cutting scene's sizing).
-      travel: how far the tool moves (mm), starting 0.02 clear of the workpiece.
-      speed: tool speed (mm/s).
-      material: the workpiece; by default steel with its density scaled by 10⁴.
-      stiffness_factor: penalty stiffness per node, in units of E × 1 mm.
-      safety: the time step as a fraction of the stable one,
-        ``2 / sqrt((2 c / h)² + k / m_min)`` with ``c`` the dilatational wave
-        speed and ``h`` the smallest element altitude (CFL with the penalty
-        spring on the lightest node).
-      damping_ratio: mass-proportional damping as a fraction of critical for
-        the workpiece's lowest shear mode (``ω₁ ≈ π c_s / 2H``).
-      skin_factor: the skin as a fraction of the search radius (one grid spacing).
-      slack: the search sizes' slack.
-      rake_degrees: the nominal rake angle.
-      slaves: ``"surface"``: the nodes of the free outline (``mesh.boundary``),
-        which meet the tool before any interior node can; ``"all"``: every
-        node, as in the cutting scene (detection then costs O(N) a step).
-      dtype: float32 or float64.
+      config: the run's numbers (``Ploughing``).
 
     Returns:
-      ``(mesh, controls, config)`` for ``run``.
+      ``(mesh, controls, plan)`` for ``scan`` and ``simulate``.
 
     Example:
-      >>> mesh, controls, config = setup(300, travel=0.1)
-      >>> mesh.nodes.shape, config.sizes.num_slaves, config.steps
+      >>> mesh, controls, plan = setup(Ploughing(300, travel=0.1))
+      >>> mesh.nodes.shape, plan.sizes.num_slaves, plan.steps
       ((297, 2), 47, 24)
     """
-    if num_nodes < 4:
-        raise ValueError(f"num_nodes must be at least 4; got {num_nodes}")
-    if not (travel > 0 and speed > 0):
-        raise ValueError(f"travel and speed must be > 0; got travel={travel}, speed={speed}")
-    if slaves not in ("surface", "all"):
-        raise ValueError(f'slaves must be "surface" or "all"; got {slaves!r}')
+    num_nodes, travel, speed, material = (
+        config.num_nodes,
+        config.travel,
+        config.speed,
+        config.material,
+    )
+    dtype = jnp.dtype(config.dtype)
     mesh = workpiece_mesh(num_nodes, material, dtype=dtype)
     nodes = np.asarray(mesh.nodes, np.float64)
     spacing = max(float(np.ptp(values) / (len(np.unique(values)) - 1)) for values in nodes.T)
-    stiffness = stiffness_factor * material.young * 1.0
+    stiffness = config.stiffness_factor * material.young * 1.0
     lightest = float(np.asarray(mesh.mass).min())
     elastic = 2 * material.wave_speed / smallest_altitude(mesh)
     omega = math.sqrt(elastic**2 + stiffness / lightest)
-    dt = safety * 2 / omega
+    dt = config.safety * 2 / omega
     _, mu = material.lame
     shear_speed = math.sqrt(mu / inertial_density(material))
-    damping = 2 * damping_ratio * math.pi * shear_speed / (2 * float(np.ptp(nodes[:, 1])))
+    damping = 2 * config.damping_ratio * math.pi * shear_speed / (2 * float(np.ptp(nodes[:, 1])))
     radius, x_tip_start = spacing, 20.02
     steps = max(1, math.ceil(travel / (speed * dt)))
-    rake = math.radians(rake_degrees)
+    rake = math.radians(config.rake_degrees)
     x_tip_end = x_tip_start - speed * dt * steps
     # Sizes for the tool anywhere along its travel: allocated against the
     # outlines at both ends together, whose inflated box holds the tool's
@@ -261,25 +221,23 @@ def setup(
         jnp.asarray(np.concatenate(ends), dtype),
         jnp.asarray(np.stack([starts, starts // count * count + (starts + 1) % count], axis=-1)),
     )
-    slave_nodes = nodes if slaves == "all" else nodes[np.asarray(mesh.boundary)]
-    search = Search(radius=radius, skin=skin_factor * radius, slack=slack)
+    slave_nodes = nodes if config.slaves == "all" else nodes[np.asarray(mesh.boundary)]
+    search = Search(radius=radius, skin=config.skin_factor * radius, slack=config.slack)
     sizes = search.allocate(jnp.asarray(slave_nodes, dtype), both).sizes
-    all_slaves = slaves == "all"
-    config = Ploughing(steps, dt, speed, x_tip_start, damping, material, search, sizes, all_slaves)
+    all_slaves = config.slaves == "all"
+    plan = Plan(steps, dt, speed, x_tip_start, damping, material, search, sizes, all_slaves)
     controls = Controls(jnp.asarray(rake, dtype), jnp.asarray(stiffness, dtype))
-    return mesh, controls, config
+    return mesh, controls, plan
 
 
-@functools.partial(jax.jit, static_argnames=("config", "detect"))
-def run(
-    mesh: Mesh, controls: Controls, config: Ploughing, detect: bool = True
-) -> tuple[Final, History]:
-    """Runs the simulation: one ``lax.scan`` of ``config.steps`` steps.
+@functools.partial(jax.jit, static_argnames=("plan", "detect"))
+def scan(mesh: Mesh, controls: Controls, plan: Plan, detect: bool = True) -> tuple[Final, History]:
+    """Runs the simulation: one ``lax.scan`` of ``plan.steps`` steps.
 
     Args:
       mesh: the workpiece ``Mesh``.
       controls: rake angle and penalty stiffness (traced, differentiable).
-      config: the static ``Ploughing`` set-up (a new one compiles anew).
+      plan: the static ``Plan`` (a new one compiles anew).
       detect: False replaces detection by the contact found at step 0 (no
         contact), to time what a step costs without it.
 
@@ -288,28 +246,28 @@ def run(
       contact may have been missed; ``simulate`` allocates larger sizes and
       runs again (its example calls this).
     """
-    material, search, dt = config.material, config.search, config.dt
+    material, search, dt = plan.material, plan.search, plan.dt
     dtype = mesh.nodes.dtype
     rake = controls.rake.astype(dtype)
     inverse_mass = jnp.where(mesh.free, 1 / mesh.mass, 0)[:, None]
-    decay = (1 - config.damping * dt / 2) / (1 + config.damping * dt / 2)
-    kick = dt / (1 + config.damping * dt / 2)
+    decay = (1 - plan.damping * dt / 2) / (1 + plan.damping * dt / 2)
+    kick = dt / (1 + plan.damping * dt / 2)
 
     def slaves_of(u):
         x = mesh.nodes + u
-        return x if config.all_slaves else x[mesh.boundary]
+        return x if plan.all_slaves else x[mesh.boundary]
 
     def on_nodes(on_slaves):
-        return on_slaves if config.all_slaves else zero.at[mesh.boundary].add(on_slaves)
+        return on_slaves if plan.all_slaves else zero.at[mesh.boundary].add(on_slaves)
 
     zero = jnp.zeros_like(mesh.nodes)
-    start = tool_surface(config.x_tip_start, rake)
-    state = search.init(slaves_of(zero), start, sizes=config.sizes)
+    start = tool_surface(plan.x_tip_start, rake)
+    state = search.init(slaves_of(zero), start, sizes=plan.sizes)
     at_rest, _ = search.closest(state, slaves_of(zero), start)
 
     def step(carry, index):
         u, v, state = carry
-        x_tip = config.x_tip_start - config.speed * dt * index.astype(dtype)
+        x_tip = plan.x_tip_start - plan.speed * dt * index.astype(dtype)
         surface = tool_surface(x_tip, rake)
         x = slaves_of(u)
         if detect:
@@ -344,71 +302,72 @@ def run(
     # step's carry, not every element's intermediates (O(steps x N) either
     # way, but some twenty times less).
     step = jax.checkpoint(step, prevent_cse=False)
-    (u, v, state), history = jax.lax.scan(step, begin, jnp.arange(config.steps))
+    (u, v, state), history = jax.lax.scan(step, begin, jnp.arange(plan.steps))
     return Final(u, v, state.overflow, state.rebuilds), history
 
 
-def mean_cutting_force(mesh: Mesh, controls: Controls, config: Ploughing) -> Array:
+def mean_cutting_force(mesh: Mesh, controls: Controls, plan: Plan) -> Array:
     """f[]: the cutting force on the tool (its x part), averaged over the run.
 
     Differentiate it with ``jax.grad(mean_cutting_force, argnums=1)``: the
     gradient runs back through the scan (the repository's
-    tests/sim/test_simulate.py checks it against central differences).
+    tests/problems/test_ploughing.py checks it against central differences).
 
     Example:
-      >>> mesh, controls, config = setup(300, travel=0.1)
-      >>> round(float(mean_cutting_force(mesh, controls, config)), -1)
+      >>> mesh, controls, plan = setup(Ploughing(300, travel=0.1))
+      >>> round(float(mean_cutting_force(mesh, controls, plan)), -1)
       1720.0
     """
-    _, history = run(mesh, controls, config)
+    _, history = scan(mesh, controls, plan)
     return jnp.mean(history.force[:, 0])
 
 
 def simulate(
-    mesh: Mesh, controls: Controls, config: Ploughing, *, tries: int = 3
+    mesh: Mesh, controls: Controls, plan: Plan, *, tries: int = 3
 ) -> tuple[Final, History, Ploughing]:
-    """``run``, with the overflow flag checked after it: on overflow, allocate
+    """``scan``, with the overflow flag checked after it: on overflow, allocate
     larger sizes (never smaller than the last) and run again.
 
     Returns:
-      ``(final, history, config)``, ``config`` holding the sizes that held.
+      ``(final, history, plan)``, ``plan`` holding the sizes that held.
 
     Example:
-      >>> mesh, controls, config = setup(300, travel=0.1)
-      >>> final, history, config = simulate(mesh, controls, config)
-      >>> config.steps, int(history.active.max()), bool(history.force[:, 0].mean() > 0)
+      >>> mesh, controls, plan = setup(Ploughing(300, travel=0.1))
+      >>> final, history, plan = simulate(mesh, controls, plan)
+      >>> plan.steps, int(history.active.max()), bool(history.force[:, 0].mean() > 0)
       (24, 1, True)
     """
     for _ in range(tries):
-        final, history = run(mesh, controls, config)
+        final, history = scan(mesh, controls, plan)
         if not bool(final.overflow):
-            return final, history, config
+            return final, history, plan
         x = mesh.nodes + final.displacement
-        x = x if config.all_slaves else x[mesh.boundary]
+        x = x if plan.all_slaves else x[mesh.boundary]
         surface = tool_surface(float(history.x_tip[-1]), controls.rake)
-        search = dataclasses.replace(config.search, slack=3.0)
-        bigger = search.allocate(x, surface, at_least=config.sizes).sizes
-        config = dataclasses.replace(config, sizes=bigger)
-    raise RuntimeError(f"the search sizes still overflowed after {tries} runs: {config.sizes}")
+        search = dataclasses.replace(plan.search, slack=3.0)
+        bigger = search.allocate(x, surface, at_least=plan.sizes).sizes
+        plan = dataclasses.replace(plan, sizes=bigger)
+    raise RuntimeError(f"the search sizes still overflowed after {tries} runs: {plan.sizes}")
 
 
-class _Callable(types.ModuleType):
-    """This module, callable as the 0.7.5 set-up function ``jaxcontact.sim.ploughing``
-    was (the package exported the function under the module's name)."""
+class Run(NamedTuple):
+    """A whole run (``run``): what was set up and what came of it."""
 
-    def __call__(self, *args, **kwargs):
-        return _ploughing(*args, **kwargs)
+    mesh: Mesh
+    controls: Controls
+    plan: Plan  # with the sizes that held
+    final: Final
+    history: History
 
 
-# Called as a module: the caller is three frames up (call, __call__, the caller).
-_ploughing = _deprecated(
-    "jaxcontact.sim.ploughing", "jaxcontact.sim.ploughing.setup", setup, stacklevel=3
-)
-__getattr__ = _forward(
-    __name__,
-    {
-        "ploughing": "jaxcontact.sim.ploughing.setup",
-        "Material": "jaxcontact.sim.materials.Elastic",
-    },
-)
-sys.modules[__name__].__class__ = _Callable
+def run(config: Ploughing) -> Run:
+    """Sets up ``config`` and runs it (``setup``, then ``simulate``).
+
+    Example:
+      >>> done = run(Ploughing(300, travel=0.1))
+      >>> done.plan.steps, int(done.history.active.max())
+      (24, 1)
+    """
+    mesh, controls, plan = setup(config)
+    final, history, plan = simulate(mesh, controls, plan)
+    return Run(mesh, controls, plan, final, history)

@@ -2,7 +2,7 @@
 
 Runs ``ploughing.simulate`` once for its results (growing the search sizes
 on overflow), then times it: the whole scan, and the same scan with
-detection replaced by a fixed contact result (``run(..., detect=False)``:
+detection replaced by a fixed contact result (``scan(..., detect=False)``:
 the same elastic update, the same force assembly, no ``Search.closest``),
 the two in alternation. The detection share is the median
 over those pairs of ``1 - without / with``: what detection adds to a step,
@@ -22,8 +22,9 @@ import numpy as np
 
 from jaxcontact import all_to_all
 from jaxcontact._timing import Timing, pinned_note
+from jaxcontact.problems.ploughing.config import Ploughing
+from jaxcontact.problems.ploughing.model import History, scan, setup, simulate, tool_surface
 from jaxcontact.sim.elements.triangle import stresses, von_mises
-from jaxcontact.sim.ploughing import History, run, setup, simulate, tool_surface
 
 
 class Summary(NamedTuple):
@@ -82,35 +83,36 @@ def run_demo(
 ) -> tuple[Summary, tuple]:
     """Sets up, runs and times the simulation; returns the summary and what to draw.
 
-    What to draw: ``(mesh, controls, config, final, history, with_detection,
+    What to draw: ``(mesh, controls, plan, final, history, with_detection,
     without)``, the last two the ``Timing`` s of the whole scan.
     """
-    mesh, controls, config = setup(nodes, travel=travel, dtype=dtype, slaves=slaves)
+    config = Ploughing(nodes, travel=travel, slaves=slaves, dtype=np.dtype(dtype).name)
+    mesh, controls, plan = setup(config)
     start = time.perf_counter()
-    final, history, config = simulate(mesh, controls, config)
+    final, history, plan = simulate(mesh, controls, plan)
     first_s = time.perf_counter() - start  # compilation and one run
 
-    # ``run`` is jitted with ``config`` static: the first call reuses the
+    # ``scan`` is jitted with ``plan`` static: the first call reuses the
     # executable ``simulate`` compiled (called the same way: jit's cache tells
     # an omitted keyword from a passed one).
     calls = (
-        lambda: run(mesh, controls, config),
-        lambda: run(mesh, controls, config, detect=False),
+        lambda: scan(mesh, controls, plan),
+        lambda: scan(mesh, controls, plan, detect=False),
     )
     with_detection, without, share = _paired_timings(calls, repeats)
     history = jax.tree.map(np.asarray, history)
     summary = Summary(
         nodes=int(mesh.nodes.shape[0]),
-        steps=config.steps,
-        steps_per_s=config.steps / with_detection.median_s,
+        steps=plan.steps,
+        steps_per_s=plan.steps / with_detection.median_s,
         detection_share=share,
         rebuilds=int(final.rebuilds),
         most_active=int(history.active.max()),
-        penetration_ratio=float(history.penetration.max()) / config.search.radius,
+        penetration_ratio=float(history.penetration.max()) / plan.search.radius,
         mean_force=tuple(float(f) for f in history.force.mean(axis=0)),
         first_s=first_s,
     )
-    return summary, (mesh, controls, config, final, history, with_detection, without)
+    return summary, (mesh, controls, plan, final, history, with_detection, without)
 
 
 def _paired_timings(calls, repeats: int) -> tuple[Timing, Timing, float]:
@@ -143,17 +145,17 @@ def main(args: argparse.Namespace) -> int:
         jax.config.update("jax_enable_x64", True)
     travel = TRAVEL if args.travel is None else args.travel
     summary, drawn = run_demo(args.nodes, travel, args.repeats, dtype)
-    mesh, controls, config, final, history, timed, untimed = drawn
-    material = config.material
+    mesh, controls, plan, final, history, timed, untimed = drawn
+    material = plan.material
     print(
         f"ploughing: {summary.nodes:,} nodes, {mesh.triangles.shape[0]:,} triangles, "
-        f"{config.sizes.num_slaves:,} slaves; steel E={material.young:g} MPa, "
+        f"{plan.sizes.num_slaves:,} slaves; steel E={material.young:g} MPa, "
         f"nu={material.poisson:g}, rho={material.density:g} t/mm3 x {material.mass_scale:g} "
         f"(mass scaling); {args.dtype}"
     )
     print(
-        f"tool at {config.speed / 1e3:g} m/s, depth of cut 1 mm, travel {travel:g} mm: "
-        f"{config.steps} steps of dt={config.dt:.3g} s; no material separation (the tool ploughs)"
+        f"tool at {plan.speed / 1e3:g} m/s, depth of cut 1 mm, travel {travel:g} mm: "
+        f"{plan.steps} steps of dt={plan.dt:.3g} s; no material separation (the tool ploughs)"
     )
     print(f"jax {jax.__version__} on {jax.devices()[0].device_kind}; {pinned_note()}")
     print(
@@ -166,7 +168,7 @@ def main(args: argparse.Namespace) -> int:
     )
     print(
         f"  list rebuilds    {summary.rebuilds:10d}   "
-        f"(of {config.steps} steps; skin {config.search.skin:.3g} mm)"
+        f"(of {plan.steps} steps; skin {plan.search.skin:.3g} mm)"
     )
     print(f"  most active      {summary.most_active:10d}   slaves in contact at one step")
     print(f"  penetration      {summary.penetration_ratio:10.1%}   of the grid spacing, at most")
@@ -181,22 +183,22 @@ def main(args: argparse.Namespace) -> int:
         return 0
     matplotlib.use("Agg")
     os.makedirs(args.out, exist_ok=True)
-    for path in _draw(mesh, controls, config, final, history, args.out):
+    for path in _draw(mesh, controls, plan, final, history, args.out):
         print(f"wrote {path}")
     return 0
 
 
-def _draw(mesh, controls, config, final, history: History, folder: str) -> list[str]:
+def _draw(mesh, controls, plan, final, history: History, folder: str) -> list[str]:
     """The deformed mesh by von Mises stress with the contact nodes; the force-travel curves."""
     import matplotlib.pyplot as plt
     from matplotlib.tri import Triangulation
 
     x = np.asarray(mesh.nodes + final.displacement)
-    sigma = stresses(mesh, final.displacement, config.material)
-    stress = np.asarray(von_mises(sigma, config.material))
+    sigma = stresses(mesh, final.displacement, plan.material)
+    stress = np.asarray(von_mises(sigma, plan.material))
     surface = tool_surface(float(history.x_tip[-1]), controls.rake)
-    rows = np.arange(len(x)) if config.all_slaves else np.asarray(mesh.boundary)
-    contact = all_to_all(x[rows], surface, radius=config.search.radius)
+    rows = np.arange(len(x)) if plan.all_slaves else np.asarray(mesh.boundary)
+    contact = all_to_all(x[rows], surface, radius=plan.search.radius)
     active, found = np.asarray(contact.active), np.asarray(contact.found)
     tool = np.asarray(surface.nodes)
     mesh_path = os.path.join(folder, "ploughing_mesh.png")
@@ -215,15 +217,15 @@ def _draw(mesh, controls, config, final, history: History, folder: str) -> list[
     panels[1].legend(loc="upper left", fontsize=8)
     figure.colorbar(shaded, ax=panels, label="von Mises stress (MPa)", shrink=0.8)
     figure.suptitle(
-        f"Tool ploughing elastic steel: {len(x):,} nodes after {config.steps} steps "
-        f"(travel {config.x_tip_start - tip_x:.2f} mm; no separation); below: near the tool"
+        f"Tool ploughing elastic steel: {len(x):,} nodes after {plan.steps} steps "
+        f"(travel {plan.x_tip_start - tip_x:.2f} mm; no separation); below: near the tool"
     )
     figure.savefig(mesh_path)
     plt.close(figure)
 
     force_path = os.path.join(folder, "ploughing_forces.png")
     figure, axes = plt.subplots(figsize=(8, 4.5), dpi=150, layout="constrained")
-    travel = config.x_tip_start - history.x_tip
+    travel = plan.x_tip_start - history.x_tip
     axes.plot(travel, history.force[:, 0], label="cutting force (x, opposing the motion)")
     axes.plot(travel, history.force[:, 1], label="thrust force (y)")
     axes.set(xlabel="tool travel (mm)", ylabel="force on the tool (N per mm of width)")

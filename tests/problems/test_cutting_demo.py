@@ -9,8 +9,9 @@ import re
 import pytest
 
 from jaxcontact import _cli
-from jaxcontact.sim import cutting, cutting_demo
-from tests.sim.test_machining import KIENZLE_BAND_AT_0_1_MM
+from jaxcontact.problems import cutting
+from jaxcontact.problems.cutting import demo as cutting_demo
+from tests.problems.test_machining import KIENZLE_BAND_AT_0_1_MM
 from tests.tolerances import HAND_FIGURE_RTOL
 
 # What summary.json must hold (cutting.summary's keys and the demo's own).
@@ -33,7 +34,6 @@ REQUIRED = {
     "kienzle_cutting_force_N_per_mm",
     "kienzle_band_N_per_mm",
     "eroded_elements",
-    "detection_share",
 }
 
 
@@ -157,25 +157,16 @@ def test_bad_options_are_argparse_errors(argv, message, capsys):
 
 
 @pytest.mark.slow
-def test_tiny_cut_end_to_end(tmp_path, capsys, monkeypatch):
+def test_tiny_cut_end_to_end(tmp_path, capsys):
     # 80 nodes, 616 steps, 0.05 mm of travel: too short for a steady chip
     # (its thickness is null), long enough for the tool to cut 0.025 mm.
-    # Most of the time is compiling the step. The detection share would
-    # compile the searches' scan too: stood in for (it is cutting's to test).
-    timed = []
-
-    def detection_share(model, state, rake_deg, mu, steps):
-        timed.append(steps)
-        return 0.25
-
-    monkeypatch.setattr(cutting, "detection_share", detection_share)
+    # Most of the time is compiling the step.
     argv = ["demo", "--travel", "0.05", "--element", "0.05", "--uncut", "0.1", "--frames", "4"]
     assert _cli.main([*argv, "--out", str(tmp_path)]) == 0
     steps = cutting.Cutting(travel=0.05, element=0.05).steps
-    assert timed == [math.ceil(steps / 4)]  # a chunk: the scan the run compiled
     captured = capsys.readouterr()
     assert "100%" in captured.err and "steps" in captured.err  # the progress bar
-    assert "cutting_force_N_per_mm" in captured.out and "detection_share" in captured.out
+    assert "cutting_force_N_per_mm" in captured.out and "detection_share" not in captured.out
     summary = json.loads((tmp_path / "summary.json").read_text())
     assert list(summary) == documented_keys()  # every key in docs/simulation.md's table
     # The header's steps are the steps run, the travel the travel asked.
@@ -187,8 +178,8 @@ def test_tiny_cut_end_to_end(tmp_path, capsys, monkeypatch):
     assert summary["cutting_force_N_per_mm"] > 0
     assert all(math.isfinite(summary[key]) for key in ("thrust_force_N_per_mm", "steps_per_second"))
     assert summary["elements"] == 54
-    assert summary["detection_share"] == 0.25 and summary["overflow"] is False
-    # The band for Ck45 at the run's 0.1 mm, worked by hand (tests/sim/test_machining.py).
+    assert summary["overflow"] is False
+    # The band for Ck45 at the run's 0.1 mm, worked by hand (tests/problems/test_machining.py).
     assert summary["kienzle_band_N_per_mm"] == pytest.approx(
         KIENZLE_BAND_AT_0_1_MM, rel=HAND_FIGURE_RTOL
     )

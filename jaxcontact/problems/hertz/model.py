@@ -42,10 +42,11 @@ control: ``d`` is an unknown and ``P`` does the work ``P d``):
 
     Π(u, d) = ½ uᵀ K u + ½ κ Σ_i L_i min(0, g_i(u, d))² - P d,
 
-found by Newton's method inside ``jax.jit``: the gradient by ``jax.grad``,
-Hessian-vector products by ``jax.jvp`` of it, each step solved by
-conjugate gradients (``jax.scipy.sparse.linalg.cg``, Jacobi-preconditioned,
-relative tolerance ``Solver.cg_tol``), then a backtracking (Armijo) line
+found by ``jaxcontact.sim.static.minimize``: Newton's method inside
+``jax.jit``, the gradient by ``jax.grad``, Hessian-vector products by
+``jax.jvp`` of it, each step solved by conjugate gradients
+(``jax.scipy.sparse.linalg.cg``, Jacobi-preconditioned, relative tolerance
+``Solver.cg_tol``), then a backtracking (Armijo) line
 search on Π. The penalty is piecewise quadratic, so once the set of pressed
 nodes settles Newton's step is exact to CG's tolerance; it stops when the
 largest nodal force residual is below ``Solver.tol`` P.
@@ -64,7 +65,7 @@ benchmarks/simulations.py, measures how fast).
 
 What the model leaves out: small strain and linear elasticity (the block's
 stresses are far above any yield stress of steel; Hertz's theory is linear
-elastic too; ``block`` refuses a problem with a > R/10, a strain p0/E* =
+elastic too; ``setup`` refuses a problem with a > R/10, a strain p0/E* =
 a/2R above 5 %); friction (Hertz's contact is frictionless); the half-space (a
 finite block: in plane strain the half-space's displacement grows like log
 r, so the approach ``d`` depends on the block's size and is not compared;
@@ -86,79 +87,19 @@ import numpy as np
 from jax import Array
 
 from jaxcontact import Surface, all_to_all
-from jaxcontact.sim._moved import forward as _forward
+from jaxcontact.problems.hertz.config import (
+    FINE,
+    MOST_WIDTH,
+    NOMINAL,
+    SEGMENTS_PER_ELEMENT,
+    SPAN,
+    Indentation,
+    _check,
+)
+from jaxcontact.problems.hertz.theory import Hertz, hertz
+from jaxcontact.sim import static
 from jaxcontact.sim.elements.triangle import Mesh, strain_energy, triangle_mesh
 from jaxcontact.sim.materials import Elastic
-
-# The uniform zone of the mesh, about the contact: |x| <= FINE a, y >= -FINE a.
-FINE = 1.5
-# The cylinder's arc, the master, covers |x| <= SPAN a: the gap grows as x²/2R
-# outside the contact, so nodes farther out cannot touch it.
-SPAN = 3.0
-# Segments of the arc per element at the contact (half an element each).
-SEGMENTS_PER_ELEMENT = 2
-# The largest a / R taken: a << R is Hertz's premise (and small strain's, p0/E* = a/2R).
-MOST_WIDTH = 0.1
-# The elements across the contact width 2a of the benchmark's meshes.
-MESHES = (12, 24, 48)
-
-
-class Indentation(NamedTuple):
-    """The problem: a rigid cylinder pressed into an elastic block (plane strain).
-
-    Defaults: a 10 mm cylinder pressed with 1,000 N per mm into steel, which
-    gives Hertz's a = 0.235 mm and p0 = 2.71 GPa (``hertz``). A pytree: pass
-    it to ``peak_pressure`` and differentiate with respect to its fields.
-    ``block`` and ``solve`` take a / R up to ``MOST_WIDTH``.
-    """
-
-    radius: float = 10.0  # R (mm)
-    force: float = 1_000.0  # P (N per mm of thickness)
-    young: float = 210_000.0  # E of the block (MPa)
-    poisson: float = 0.3  # ν of the block
-
-
-class Hertz(NamedTuple):
-    """Hertz's line contact of a rigid cylinder on an elastic half-space."""
-
-    half_width: float  # a (mm)
-    peak: float  # p0 (MPa)
-    modulus: float  # E* = E / (1 - ν²) (MPa)
-
-    def pressure(self, x):
-        """f[...]: ``p0 sqrt(1 - x²/a²)`` at ``x`` (mm; array-like), 0 outside ``|x| < a`` (MPa)."""
-        x = np.asarray(x, np.float64)
-        return self.peak * np.sqrt(np.clip(1 - (x / self.half_width) ** 2, 0, None))
-
-
-# The default problem (the class's defaults).
-NOMINAL = Indentation()
-
-
-def _check(problem: Indentation) -> None:
-    if not isinstance(problem, Indentation):
-        raise ValueError(f"problem must be an Indentation; got {type(problem).__name__}")
-    for name in ("radius", "force", "young"):
-        value = getattr(problem, name)
-        if not (np.ndim(value) == 0 and np.isfinite(value) and value > 0):
-            raise ValueError(f"problem.{name} must be a finite number > 0; got {value!r}")
-    nu = problem.poisson
-    if not (np.ndim(nu) == 0 and np.isfinite(nu) and 0 <= nu < 0.5):
-        raise ValueError(f"problem.poisson must be in [0, 0.5); got {nu!r}")
-
-
-def hertz(problem: Indentation) -> Hertz:
-    """Hertz's a, p0 and E* for ``problem`` (Johnson, 1985, eq. 4.43-4.45).
-
-    Example:
-      >>> exact = hertz(Indentation())
-      >>> round(exact.half_width, 4), round(exact.peak), round(float(exact.pressure(0.0)))
-      (0.2349, 2710, 2710)
-    """
-    _check(problem)
-    modulus = problem.young / (1 - problem.poisson**2)
-    half_width = math.sqrt(4 * problem.force * problem.radius / (math.pi * modulus))
-    return Hertz(half_width, 2 * problem.force / (math.pi * half_width), modulus)
 
 
 class Block(NamedTuple):
@@ -189,7 +130,7 @@ def _graded(element: float, inner: float, outer: float, growth: float) -> np.nda
     return np.concatenate([[0.0], np.cumsum(steps + grown)])
 
 
-def block(
+def setup(
     problem: Indentation = NOMINAL,
     across: int = 12,
     *,
@@ -214,7 +155,7 @@ def block(
     free. The mesh is symmetric about x = 0 but for its diagonals.
 
     Example:
-      >>> found = block(Indentation(), 12)
+      >>> found = setup(Indentation(), 12)
       >>> found.mesh.nodes.shape, found.mesh.triangles.shape, found.top.shape
       ((861, 2), (1600, 3), (41,))
       >>> round(float(found.element) / hertz(Indentation()).half_width, 4)  # h / a = 2 / 12
@@ -310,6 +251,11 @@ class Solver:
             if not (isinstance(value, int) and value >= 1):
                 raise ValueError(f"Solver.{name} must be an integer >= 1; got {value!r}")
 
+    @property
+    def newton(self) -> static.Newton:
+        """The Newton-CG settings (``jaxcontact.sim.static``)."""
+        return static.Newton(self.newton_steps, self.cg_tol, self.cg_steps, self.halvings)
+
 
 class Equilibrium(NamedTuple):
     """The solution of one solve (arrays; T top nodes)."""
@@ -384,50 +330,6 @@ def _diagonal(block: Block, problem: Indentation, solver: Solver, z: Array) -> A
     return jnp.concatenate([nodal, along_d[None]])
 
 
-def _newton(block: Block, problem: Indentation, solver: Solver, z: Array):
-    """Minimises Π from ``z``; returns ``(z, (residual, Newton steps))``."""
-    energy = functools.partial(_energy, block, problem, solver)
-    value_and_gradient = jax.value_and_grad(energy)
-    gradient = jax.grad(energy)
-
-    def step(state):
-        z, value, g, _, count = state
-        inverse = 1 / _diagonal(block, problem, solver, z)
-        direction, _ = jax.scipy.sparse.linalg.cg(
-            lambda v: jax.jvp(gradient, (z,), (v,))[1],
-            -g,
-            tol=solver.cg_tol,
-            maxiter=solver.cg_steps,
-            M=lambda r: inverse * r,
-        )
-        slope = jnp.vdot(g, direction)
-
-        # Armijo's backtracking: halve the step until Π falls by a part of what
-        # the slope promises. Near the minimum the full step is taken.
-        def too_high(search):
-            t, tries = search
-            return (energy(z + t * direction) > value + 1e-4 * t * slope) & (
-                tries < solver.halvings
-            )
-
-        t, _ = jax.lax.while_loop(
-            too_high, lambda search: (search[0] / 2, search[1] + 1), (jnp.ones_like(value), 0)
-        )
-        z = z + t * direction
-        value, g = value_and_gradient(z)
-        return z, value, g, jnp.max(jnp.abs(g)), count + 1
-
-    def going(state):
-        *_, residual, count = state
-        return (residual > solver.tol * problem.force) & (count < solver.newton_steps)
-
-    value, g = value_and_gradient(z)
-    z, _, _, residual, count = jax.lax.while_loop(
-        going, step, (z, value, g, jnp.max(jnp.abs(g)), 0)
-    )
-    return z, (residual, count)
-
-
 def _start(block: Block, problem: Indentation) -> Array:
     """f[F + 1]: the Newton start: the block at rest, the cylinder sunk to half Hertz's
     width (d = (a/2)² / 2R), so that a few nodes press on it."""
@@ -437,49 +339,19 @@ def _start(block: Block, problem: Indentation) -> Array:
     return start.at[-1].set(quarter / (2 * problem.radius))
 
 
-@functools.partial(jax.custom_vjp, nondiff_argnums=(2,))
 def _equilibrium(block: Block, problem: Indentation, solver: Solver):
-    """``(z, residual, Newton steps)`` at Π's minimum; its gradient with respect to
-    ``problem`` by the implicit-function theorem (the adjoint below), the mesh held fixed."""
-    z, (residual, steps) = _newton(block, problem, solver, _start(block, problem))
-    return z, residual, steps
-
-
-def _equilibrium_forward(block: Block, problem: Indentation, solver: Solver):
-    found = _equilibrium(block, problem, solver)
-    return found, (block, problem, found[0])
-
-
-def _equilibrium_backward(solver: Solver, saved, cotangents):
-    # At the minimum F(z, θ) = ∇_z Π = 0, so dz/dθ = -H⁻¹ ∂F/∂θ with H = ∇²_z Π,
-    # symmetric: a cotangent z̄ pulls back to θ̄ = -(∂F/∂θ)ᵀ λ with H λ = z̄, one CG
-    # solve as a Newton step is. Not through custom_root or a custom_jvp: their
-    # transpose of jax's cg raises (jax-ml/jax issue 33872, open), so reverse mode
-    # only. The mesh gets no cotangent: it is held fixed.
-    block, problem, z = saved
-    z_bar = cotangents[0]
-    forces = jax.grad(_energy, argnums=3)  # F = ∇_z Π(block, problem, solver, z)
-    inverse = 1 / _diagonal(block, problem, solver, z)
-    adjoint, _ = jax.scipy.sparse.linalg.cg(
-        lambda v: jax.jvp(lambda y: forces(block, problem, solver, y), (z,), (v,))[1],
-        z_bar,
-        tol=solver.cg_tol,
-        maxiter=solver.cg_steps,
-        M=lambda r: inverse * r,
+    """``(z, residual, Newton steps)`` at Π's minimum (``static.minimize``): its gradient
+    with respect to ``problem`` by the implicit-function theorem, the mesh held fixed.
+    Newton stops when the largest nodal force residual is below ``solver.tol`` P."""
+    return static.minimize(
+        lambda block, problem, z: _energy(block, problem, solver, z),
+        lambda block, problem, z: _diagonal(block, problem, solver, z),
+        _start,
+        lambda block, problem: solver.tol * problem.force,
+        block,
+        problem,
+        solver.newton,
     )
-    _, pullback = jax.vjp(lambda prm: forces(block, prm, solver, z), problem)
-    (problem_bar,) = pullback(-adjoint)
-    fixed = jax.tree.map(_no_cotangent, block)
-    return fixed, problem_bar
-
-
-def _no_cotangent(array):
-    if jnp.issubdtype(array.dtype, jnp.inexact):
-        return jnp.zeros_like(array)
-    return np.zeros(array.shape, jax.dtypes.float0)
-
-
-_equilibrium.defvjp(_equilibrium_forward, _equilibrium_backward)
 
 
 @functools.partial(jax.jit, static_argnames="solver")
@@ -487,12 +359,12 @@ def equilibrium(block: Block, problem: Indentation, solver: Solver = Solver()) -
     """The block's static equilibrium under the cylinder (one compiled program).
 
     Args:
-      block: the mesh (``block``), fixed; it need not be the one ``problem`` sizes.
+      block: the mesh (``setup``), fixed; it need not be the one ``problem`` sizes.
       problem: R, P, E, ν (traced: differentiable, by the implicit-function theorem).
       solver: the solver's settings (static).
 
     Returns:
-      An ``Equilibrium``; check ``residual`` against ``solver.tol * P`` (``solve`` does).
+      An ``Equilibrium``; check ``residual`` against ``solver.tol * P`` (``run`` does).
     """
     _needs_x64()
     z, residual, steps = _equilibrium(block, problem, solver)
@@ -512,14 +384,14 @@ def peak_pressure(block: Block, problem: Indentation, solver: Solver = Solver())
     same (the module's docstring says why). For example (it compiles for some
     seconds, so it is not run as a doctest)::
 
-        grads = jax.grad(peak_pressure, argnums=1)(block(), Indentation())
+        grads = jax.grad(peak_pressure, argnums=1)(setup(), Indentation())
         grads.radius, grads.young  # dp0/dR (MPa/mm), dp0/dE (MPa/MPa)
     """
     return equilibrium(block, problem, solver).pressure[block.centre]
 
 
 class Result(NamedTuple):
-    """``solve``'s answer, host numbers (T top nodes). Errors are fractions: FE / Hertz - 1."""
+    """``run``'s answer, host numbers (T top nodes). Errors are fractions: FE / Hertz - 1."""
 
     problem: Indentation  # what was solved
     x: np.ndarray  # f64[T]  the top nodes' x (reference, mm), increasing
@@ -565,12 +437,12 @@ def fit_half_width(x, pressure) -> tuple[float, float]:
 def _needs_x64() -> None:
     if not jax.config.jax_enable_x64:
         raise ValueError(
-            "jaxcontact.sim.hertz needs float64: the penetration is some 1e-5 of the "
+            "jaxcontact.problems.hertz needs float64: the penetration is some 1e-5 of the "
             "contact's width; jax.config.update('jax_enable_x64', True) first"
         )
 
 
-def solve(
+def run(
     problem: Indentation = NOMINAL,
     across: int = 12,
     *,
@@ -597,7 +469,7 @@ def solve(
     _needs_x64()
     if not isinstance(solver, Solver):
         raise ValueError(f"solver must be a Solver; got {type(solver).__name__}")
-    mesh = block(problem, across, width=width, depth=depth)
+    mesh = setup(problem, across, width=width, depth=depth)
     exact = hertz(problem)
     found = jax.tree.map(np.asarray, equilibrium(mesh, problem, solver))
     if not found.residual <= solver.tol * problem.force:
@@ -633,6 +505,3 @@ def solve(
         residual=float(found.residual),
         newton_steps=int(found.newton_steps),
     )
-
-
-__getattr__ = _forward(__name__, {"Material": "jaxcontact.sim.materials.Elastic"})
