@@ -10,5 +10,6 @@ rows, timing, the check against a reference, figure style, and ``internals``, th
 importing jaxcontact's private names) and the peers' code in ``peer_codes``. Optional packages
 (matplotlib, tqdm, scipy, shapely, jax-md, libigl, numba, ipctk: the ``bench``, ``peers`` and
 ``peers2`` extras) are imported where used; a missing one is reported, never a crash.
-``archive/`` holds experiments that are not maintained; nothing here imports them.
+The one-off experiments of earlier rounds are kept at git tag ``benchmarks-archive-1.2``
+(``benchmarks/archive/``), not in the tree.
 """

@@ -24,7 +24,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from benchmarks.harness.internals import _inputs, _normals, _outline, _track
+from benchmarks.harness.internals import _normals, _outline, _track, check_surface, resolve_segments
 from benchmarks.harness.timing import time_interleaved
 from jaxcontact import Contact, ContactList, Pairs, Search, Surface, all_to_all
 from jaxcontact.forces import Friction, coulomb, penalty
@@ -855,7 +855,7 @@ def pieces_part(frames, compact, plain_results, repeats, warmup):
     corner = _normals.CORNER_DEGREES
 
     def segments_of(surface):
-        return _inputs.resolve_segments(_inputs.check_surface(surface, x0.dtype))
+        return resolve_segments(check_surface(surface, x0.dtype))
 
     calls = {"a jitted call returning one row (the floor)": (jax.jit(lambda x: x[0]), (x1,))}
     if compact:

@@ -1,7 +1,8 @@
 """Plain calls pad to size classes: a long process compiles few programs.
 
 Each program XLA compiles maps hundreds of memory regions into the process
-(benchmarks/archive/long_process.py); plain calls at many shapes must share programs.
+(benchmarks/archive/long_process.py at git tag benchmarks-archive-1.2); plain calls at
+many shapes must share programs.
 """
 
 import jax
