@@ -1,6 +1,7 @@
 """The benchmarks: ten maintained suites, each a script run from the repository root as
 ``python benchmarks/<suite>.py`` (each puts the root on ``sys.path`` so that ``benchmarks.*`` and
-``tests.oracle`` import), and ``report.py``, which regenerates the report from their records.
+``tests.support.oracle`` import), and ``report.py``, which regenerates the report from their
+records.
 Not part of the installed package.
 
 Every suite has ``run(args)`` (measures; returns its tables and figure data) and

@@ -16,7 +16,7 @@ from benchmarks.peer_codes import baselines
 from jaxcontact import Surface
 from jaxcontact._cli import _parser
 from jaxcontact.scenes import cutting_scene, paper_scene
-from tests.oracle import oracle_contact
+from tests.support.oracle import oracle_contact
 
 
 def _scene_arrays(scene):

@@ -23,7 +23,7 @@ import os
 
 import pytest
 
-from tests.helpers import X64, assert_pytest_passes_in_subprocess
+from tests.support.helpers import X64, assert_pytest_passes_in_subprocess
 
 
 @pytest.mark.slow

@@ -20,8 +20,8 @@ from jax.test_util import check_grads
 
 from jaxcontact import ContactList, Pairs, Search, Surface, all_to_all, bucket_sort, track
 from jaxcontact.forces import Forces, Friction, coulomb, penalty
-from tests.helpers import FLOAT
-from tests.tolerances import (
+from tests.support.helpers import FLOAT
+from tests.support.tolerances import (
     DISSIPATION_SLACK,
     FD_SMOOTH_ATOL,
     FD_SMOOTH_RTOL,

@@ -12,9 +12,9 @@ from jaxcontact import Surface
 from jaxcontact._pipeline.geometry import edge, squared_distance
 from jaxcontact._pipeline.lowest import lowest_score
 from jaxcontact.scenes import paper_scene
-from tests import helpers
-from tests.oracle import oracle_contact
-from tests.tolerances import FLOAT32_RTOL, FLOAT32_SUM_RTOL
+from tests.support import helpers
+from tests.support.oracle import oracle_contact
+from tests.support.tolerances import FLOAT32_RTOL, FLOAT32_SUM_RTOL
 
 # All of this file runs again with x64 off (tests/test_x64_off.py), the
 # sweep over random scenes' sizes at one size.

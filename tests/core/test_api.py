@@ -20,7 +20,7 @@ from jaxcontact import (
     swept,
 )
 from jaxcontact.forces import penalty
-from tests.helpers import local_atol
+from tests.support.helpers import local_atol
 
 PACKAGE = pathlib.Path(jaxcontact.__file__).resolve().parent
 

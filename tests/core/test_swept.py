@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import jaxcontact
-from tests import helpers
+from tests.support import helpers
 
 # All of this file runs again with x64 off (tests/test_x64_off.py), the
 # sweep over random scenes' sizes at one size.

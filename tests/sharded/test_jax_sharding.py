@@ -25,7 +25,7 @@ from jax.sharding import PartitionSpec as P
 from jaxcontact import Search, Surface, all_to_all, bucket_sort, bucket_swept, swept
 from jaxcontact._pipeline import driver
 from jaxcontact._query.closest import CLOSEST
-from tests.helpers import local_atol
+from tests.support.helpers import local_atol
 
 RADIUS = 0.25
 SKIN = 0.1

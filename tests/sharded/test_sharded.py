@@ -26,8 +26,8 @@ from jaxcontact._query.closest import CLOSEST
 from jaxcontact._types import CELLS_ABOVE
 from jaxcontact.forces import penalty
 from jaxcontact.scenes import cutting_scene, rough_die_scene
-from tests.helpers import assert_same_contact, assert_same_crossing, penalty_total
-from tests.tolerances import FLOAT64_EXACT_ATOL, FLOAT64_RTOL
+from tests.support.helpers import assert_same_contact, assert_same_crossing, penalty_total
+from tests.support.tolerances import FLOAT64_EXACT_ATOL, FLOAT64_RTOL
 
 DEVICES = 4
 RADIUS = 0.1

@@ -21,7 +21,7 @@ import pytest
 
 from jaxcontact.sim import cutting, cutting_demo, explicit, materials
 from jaxcontact.sim.elements import q4
-from tests.tolerances import (
+from tests.support.tolerances import (
     FD_RUN_RTOL,
     FLOAT32_ATOL,
     FLOAT32_RTOL,

@@ -11,7 +11,7 @@ import pytest
 from jaxcontact import _cli
 from jaxcontact.sim import cutting, cutting_demo
 from tests.sim.test_machining import KIENZLE_BAND_AT_0_1_MM
-from tests.tolerances import HAND_FIGURE_RTOL
+from tests.support.tolerances import HAND_FIGURE_RTOL
 
 # What summary.json must hold (cutting.summary's keys and the demo's own).
 REQUIRED = {

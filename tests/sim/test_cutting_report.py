@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from jaxcontact.sim import cutting, cutting_demo
-from tests.tolerances import STEADY_FIT_RTOL
+from tests.support.tolerances import STEADY_FIT_RTOL
 
 ROWS = 6000  # rows of a synthetic history: 0.6 mm of travel
 SPACING = 0.01  # mm: one "element" of travel, 100 rows

@@ -17,7 +17,7 @@ from jaxcontact import _cli
 from jaxcontact.sim import hertz
 from jaxcontact.sim.elements.triangle import internal_forces, strain_energy
 from jaxcontact.sim.materials import Elastic
-from tests.tolerances import (
+from tests.support.tolerances import (
     CLOSED_FORM_RTOL,
     FLOAT64_RTOL,
     FLOAT64_STEPS_RTOL,

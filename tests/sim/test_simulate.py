@@ -17,7 +17,7 @@ from jaxcontact import _cli
 from jaxcontact.scenes import cutting_tool_outline
 from jaxcontact.sim.demo import run_demo
 from jaxcontact.sim.ploughing import mean_cutting_force, run, setup, simulate, tool_outline
-from tests.tolerances import FLOAT64_RTOL, FLOAT64_STEPS_RTOL, RERUN_ATOL
+from tests.support.tolerances import FLOAT64_RTOL, FLOAT64_STEPS_RTOL, RERUN_ATOL
 
 pytestmark = [pytest.mark.simulation, pytest.mark.slow, pytest.mark.x64]
 

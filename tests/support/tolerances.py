@@ -1,6 +1,6 @@
 """Every tolerance of the suite, named, each with the reason for its size.
 
-Tests import them from here (or through tests/helpers.py, which builds the
+Tests import them from here (or through tests/support/helpers.py, which builds the
 per-dtype bounds of the detectors' geometry from the first group). A literal
 in a test that is not from here is not a tolerance (a size, a coordinate, a
 step). ``eps``: float32's is 1.2e-7, float64's 2.2e-16.
@@ -15,7 +15,7 @@ import numpy as np
 # Gaps, projections, crossing times: a handful of operations on differences of
 # the inputs, each within eps/2 of the local scale (helpers.local_atol).
 LOCAL_ULPS = {np.dtype(np.float32): 8, np.dtype(np.float64): 8}
-# The exact-oracle bounds (tests/exact_checks.py): the same count, per term.
+# The exact-oracle bounds (tests/support/exact_checks.py): the same count, per term.
 EXACT_ULPS = 8
 # A detector's and the dense form's gradients of one pair: two programs that
 # contract into fused multiply-adds differently (1e-12 in float64).
