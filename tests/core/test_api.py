@@ -21,6 +21,7 @@ from jaxcontact import (
 )
 from jaxcontact.forces import penalty
 from tests.support.helpers import local_atol
+from tests.support.tolerances import FLOAT64_ATOL
 
 PACKAGE = pathlib.Path(jaxcontact.__file__).resolve().parent
 
@@ -292,7 +293,7 @@ def test_contact_forces_warns_and_equals_the_penalty():
         on_slaves, on_master = jaxcontact.contact_forces(contact, 10.0)
     forces = penalty(contact, _surface(), 10.0)
     np.testing.assert_allclose(on_slaves, forces.on_slaves)
-    np.testing.assert_allclose(on_master, jnp.sum(forces.on_master, axis=0), atol=1e-12)
+    np.testing.assert_allclose(on_master, jnp.sum(forces.on_master, axis=0), atol=FLOAT64_ATOL)
 
 
 def test_the_wheel_lists_every_package_of_the_library_and_nothing_else():
