@@ -1,6 +1,7 @@
 """The benchmarks: ten maintained suites, each a script run from the repository root as
 ``python benchmarks/<suite>.py`` (each puts the root on ``sys.path`` so that ``benchmarks.*`` and
-``tests.oracle`` import), and ``report.py``, which regenerates the report from their records.
+``tests.support.oracle`` import), and ``report.py``, which regenerates the report from their
+records.
 Not part of the installed package.
 
 Every suite has ``run(args)`` (measures; returns its tables and figure data) and
@@ -10,5 +11,6 @@ rows, timing, the check against a reference, figure style, and ``internals``, th
 importing jaxcontact's private names) and the peers' code in ``peer_codes``. Optional packages
 (matplotlib, tqdm, scipy, shapely, jax-md, libigl, numba, ipctk: the ``bench``, ``peers`` and
 ``peers2`` extras) are imported where used; a missing one is reported, never a crash.
-``archive/`` holds experiments that are not maintained; nothing here imports them.
+The one-off experiments of earlier rounds are kept at git tag ``benchmarks-archive-1.2``
+(``benchmarks/archive/``), not in the tree.
 """

@@ -1,7 +1,7 @@
 """Numerical stability: how far jaxcontact's answers are from the exact ones, and where.
 
 Every reference value comes from the exact rational oracle of the test suite
-(``tests/oracle.py``, ``fractions.Fraction``) evaluated on the very inputs the
+(``tests/support/oracle.py``, ``fractions.Fraction``) evaluated on the very inputs the
 library sees (already rounded to float32 or float64), so an error here is the
 library's rounding alone. Four studies, each in float32 and float64, one panel
 of the figure each:
@@ -34,7 +34,7 @@ import math
 import pathlib
 import sys
 
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))  # tests.oracle, benchmarks.*
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))  # tests.support, benchmarks.*
 
 import jax
 import jax.numpy as jnp
@@ -42,7 +42,7 @@ import numpy as np
 
 import jaxcontact
 from benchmarks.harness import _run, report
-from tests import oracle
+from tests.support import oracle
 
 DTYPES = {"float32": np.float32, "float64": np.float64}
 ULPS = 8  # the constant of the bounds the property tests assert (tests/core/test_properties.py)
@@ -262,10 +262,10 @@ def study_ties(rng, samples, deltas=DELTAS) -> list[dict]:
 
 INTRO = (
     "Every reference value comes from the exact rational oracle of the test suite "
-    "(`tests/oracle.py`, `fractions.Fraction`) evaluated on the very inputs the library sees "
-    "(already rounded to float32 or float64), so an error here is the library's arithmetic "
-    'alone. Seeded and exact: the same on any machine. "scale" is `|x - a| + |b - a|` for '
-    "the chosen segment, the length the error is made of; the property tests assert "
+    "(`tests/support/oracle.py`, `fractions.Fraction`) evaluated on the very inputs the "
+    "library sees (already rounded to float32 or float64), so an error here is the library's "
+    'arithmetic alone. Seeded and exact: the same on any machine. "scale" is `|x - a| + |b - a|` '
+    "for the chosen segment, the length the error is made of; the property tests assert "
     f"`|gap - exact| <= {ULPS} eps scale`."
 )
 # Study -> (table title, what it did: the table's note).

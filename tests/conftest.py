@@ -8,7 +8,7 @@ process-wide):
 - ``JAXCONTACT_X64=0``: x64 off, JAX's default and the path most users run:
   NumPy float64 inputs become float32. Tests that need float64 skip
   themselves: those marked ``x64`` and every case parametrized with a float64
-  dtype. Tests written for "the best float" use ``tests.helpers.FLOAT``,
+  dtype. Tests written for "the best float" use ``tests.support.helpers.FLOAT``,
   float32 in this mode. ``tests/test_x64_off.py`` runs a chosen part of the
   suite this way in a process of its own.
 
@@ -22,7 +22,7 @@ floating-point results may differ from the optimised code's in the last
 bits (docs/development.md has the measurements). Every test passed so but
 two, whose checks depend on the optimised code (two routes of one
 arithmetic, or two steps of one loop, agreeing to the last bit): they compile
-their programs with XLA's defaults themselves (``tests.helpers.XLA_DEFAULTS``;
+their programs with XLA's defaults themselves (``tests.support.helpers.XLA_DEFAULTS``;
 tests/core/test_small_paths.py and tests/core/test_all_to_all.py).
 ``JAXCONTACT_FAST_COMPILE=0`` compiles with XLA's defaults instead;
 ``tests/test_x64_off.py`` runs its pass that way, so that the path most
@@ -113,7 +113,7 @@ def pytest_configure(config):
 @pytest.hookimpl(tryfirst=True)  # before -m reads the markers added here
 def pytest_collection_modifyitems(config, items):
     for item in items:
-        if item.nodeid.startswith("jaxcontact/sim/"):  # the simulation's doctests
+        if item.nodeid.startswith(("jaxcontact/sim/", "jaxcontact/problems/")):  # their doctests
             item.add_marker(pytest.mark.simulation)
             item.add_marker(pytest.mark.slow)
     # The files with long tests (subprocess suites, simulations) first, so

@@ -16,7 +16,8 @@ from benchmarks.peer_codes import baselines
 from jaxcontact import Surface
 from jaxcontact._cli import _parser
 from jaxcontact.scenes import cutting_scene, paper_scene
-from tests.oracle import oracle_contact
+from tests.support.oracle import oracle_contact
+from tests.support.tolerances import FLOAT64_ATOL
 
 
 def _scene_arrays(scene):
@@ -34,7 +35,9 @@ def test_reference_equals_exact_oracle(build):
     reference = answers.reference_contact(x, scene.surface, scene.radius, chunk=16)
     exact = oracle_contact(x, scene.surface.nodes, scene.surface.segments, radius=scene.radius)
     np.testing.assert_array_equal(reference.segment, exact.segment)
-    np.testing.assert_allclose(reference.gap[exact.found], exact.gap[exact.found], atol=1e-12)
+    np.testing.assert_allclose(
+        reference.gap[exact.found], exact.gap[exact.found], atol=FLOAT64_ATOL
+    )
 
 
 @pytest.mark.x64

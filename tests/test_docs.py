@@ -20,7 +20,7 @@ FENCE = re.compile(r"^( *)```(\S*)\n(.*?)^\1```", re.S | re.M)
 LANGUAGES = {"python", "bash", "text"}
 
 # page -> (as written, as run): sizes cut down, and the one gradient of the
-# cutting run taken as a value (tests/sim/test_cutting.py checks that gradient
+# cutting run taken as a value (tests/problems/test_cutting.py checks that gradient
 # against finite differences in float64; compiling it again here would double
 # CI's longest compile).
 SMALLER = {
@@ -29,12 +29,12 @@ SMALLER = {
         ("curling_chip(10_000)", "curling_chip(2_000)"),
     ],
     "docs/simulation.md": [
-        ("setup(10_000, travel=0.5)", "setup(300, travel=0.1)"),
+        ("Ploughing(10_000, travel=0.5)", "Ploughing(300, travel=0.1)"),
         (
             "print(jax.grad(force, argnums=(0, 1))(math.radians(5.0), 0.3))",
             "value = force(math.radians(5.0), 0.3)",
         ),
-        # tests/sim/test_hertz.py checks this gradient; here the value, whose program the
+        # tests/problems/test_hertz.py checks this gradient; here the value, whose program the
         # solve above compiled.
         (
             "print(jax.grad(hertz.peak_pressure, argnums=1)(block, problem))",

@@ -5,7 +5,6 @@
 record it was drawn from. Nothing here runs a benchmark.
 """
 
-import ast
 import json
 import pathlib
 import shutil
@@ -113,19 +112,3 @@ def test_cells_are_formatted_one_way():
         "yes",
         "a\\|b",
     ]
-
-
-def test_nothing_maintained_imports_the_archive():
-    archived = {p.stem for p in (ROOT / "benchmarks" / "archive").glob("*.py")}
-    maintained = [*(ROOT / "benchmarks").glob("*.py"), *(ROOT / "benchmarks").glob("*/*.py")]
-    for path in (p for p in maintained if "archive" not in p.parts):
-        for node in ast.walk(ast.parse(path.read_text())):
-            if isinstance(node, ast.Import):
-                names = [alias.name for alias in node.names]
-            elif isinstance(node, ast.ImportFrom):
-                names = [node.module or ""]
-            else:
-                continue
-            for name in names:
-                assert "archive" not in name.split("."), f"{path.name} imports {name}"
-                assert name.split(".")[0] not in archived, f"{path.name} imports {name}"

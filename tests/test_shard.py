@@ -17,7 +17,7 @@ from jax.sharding import PartitionSpec as P
 
 from jaxcontact import Contact, all_to_all
 from jaxcontact.scenes import cutting_scene
-from tests.helpers import assert_pytest_passes_in_subprocess
+from tests.support.helpers import assert_pytest_passes_in_subprocess
 
 ROOT = Path(__file__).resolve().parent.parent
 

@@ -14,13 +14,20 @@ import types
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 # The documented namespaces: the package, its two public modules, and the simulation's
 # parts and problems.
-MODULES = ["jaxcontact", "jaxcontact.forces", "jaxcontact.scenes", "jaxcontact.sim"] + [
-    f"jaxcontact.sim.{name}"
-    for name in (
-        "materials elements.q4 elements.triangle explicit coupling tools "
-        "cutting ploughing hertz machining"
-    ).split()
-]
+MODULES = (
+    ["jaxcontact", "jaxcontact.forces", "jaxcontact.scenes", "jaxcontact.sim"]
+    + [
+        f"jaxcontact.sim.{name}"
+        for name in "materials elements.q4 elements.triangle explicit coupling tools static".split()
+    ]
+    + [
+        f"jaxcontact.problems.{name}"
+        for name in (
+            "cutting cutting.config cutting.model cutting.report cutting.machining "
+            "ploughing ploughing.config ploughing.model hertz hertz.config hertz.model hertz.theory"
+        ).split()
+    ]
+)
 DIRECTIVE = re.compile(r"^::: *(\S+)", re.M)
 
 

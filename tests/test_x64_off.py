@@ -11,7 +11,7 @@ tests/conftest.py): every detector
 ``Search`` object, the validation
 errors and the dtype rules, with the tests that need float64 skipped
 (conftest.py) and the sweeps over random scenes' sizes
-(tests/core/test_all_to_all.py, tests/core/test_swept.py) at their largest
+(tests/core/test_oracle.py, over both queries) at their largest
 size only. Gradients and transforms (tests/core/test_grad.py,
 tests/core/test_transforms.py) run with x64 on only since 0.4.0, to keep CI
 under its ceiling; their float32 programs are the same but for index dtypes. By hand, the same:
@@ -23,7 +23,7 @@ import os
 
 import pytest
 
-from tests.helpers import X64, assert_pytest_passes_in_subprocess
+from tests.support.helpers import X64, assert_pytest_passes_in_subprocess
 
 
 @pytest.mark.slow

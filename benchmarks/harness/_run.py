@@ -23,7 +23,7 @@ import jax
 import numpy as np
 
 from benchmarks.harness import answers, report
-from benchmarks.harness.internals import _bucket
+from benchmarks.harness.internals import sized_bucket_sort, sized_bucket_swept
 from benchmarks.harness.timing import Timing, compiled_call, pinned_note, time_interleaved
 from benchmarks.peer_codes import numba_grid
 from jaxcontact import ContactList
@@ -192,7 +192,7 @@ def sized_contact(radius, sizes):
 
     @jax.jit
     def contact(x, surface):
-        return _bucket.sized_bucket_sort(x, surface, radius=radius, sizes=sizes)
+        return sized_bucket_sort(x, surface, radius=radius, sizes=sizes)
 
     return contact
 
@@ -203,7 +203,7 @@ def sized_crossing(sizes):
 
     @jax.jit
     def crossing(x_prev, x, surface):
-        return _bucket.sized_bucket_swept(x_prev, x, surface, sizes=sizes)
+        return sized_bucket_swept(x_prev, x, surface, sizes=sizes)
 
     return crossing
 
@@ -295,9 +295,9 @@ def reuse_pages() -> None:
     and glibc moves the threshold itself as large blocks are freed: a call's
     time then depends on what ran before it in the process (the numba grid on
     the chip's outline at 10^4 nodes: 4.4-4.7 ms in a new process, 1.0 ms
-    after a scene of 10^6 nodes). ``benchmarks/archive/malloc.py`` measures both
-    settings; every program ran as fast or faster with pages reused, so the
-    comparisons of peers set it for all of them.
+    after a scene of 10^6 nodes). The archive's ``malloc.py`` (git tag
+    ``benchmarks-archive-1.2``) measured both settings; every program ran as fast
+    or faster with pages reused, so the comparisons of peers set it for all of them.
     """
     mallopt = glibc_mallopt()
     if mallopt is None:
@@ -338,7 +338,7 @@ def suite(name, run, draw, description, argv=None, *, options=()) -> int:
         parser.add_argument(*flags, **keywords)
     argv = sys.argv[1:] if argv is None else list(argv)
     args = parser.parse_args(argv)
-    reuse_pages()  # every peer at its best (benchmarks/archive/malloc.py)
+    reuse_pages()  # every peer at its best (malloc.py at git tag benchmarks-archive-1.2)
     jax.config.update("jax_enable_x64", True)  # float64 scenes and variants beside float32
     rec = _record(name, args, run(args), argv)
     rec["allocator"] = list(_allocator)

@@ -3,7 +3,7 @@
 The reference is ``jaxcontact.all_to_all`` in float64 on the scene's very
 numbers (the reference of a float32 scene is the float64 answer for the same
 float32 numbers), with the library's own tie rules (docs/contract.md,
-"Ties"); the test suite's exact oracle (``tests/oracle.py``) is what checks
+"Ties"); the test suite's exact oracle (``tests/support/oracle.py``) is what checks
 ``all_to_all`` itself. ``compare`` counts a segment other than the
 reference's, at exactly the reference's float64 distance, as a tie, not an
 error: a peer may pick either of two equally near segments.

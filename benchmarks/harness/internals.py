@@ -6,29 +6,28 @@ expose. Importing them in this one module keeps the benchmarks' dependence on
 the library's internals in one place: when a private module is reorganised,
 this file is the one to update. Where the public API does the same job
 (``jaxcontact.Search``, ``all_to_all``, ``bucket_sort``), the benchmarks call
-it instead.
+it instead. It holds only what a maintained suite or test imports, so a name
+that nothing uses any more goes with its last caller.
 
-The names the suites call (``contact_jit``, ``sized_bucket_sort``, ...) are
-thin adapters onto the library's one pipeline (``jaxcontact._pipeline.driver``
-run with the ``CLOSEST`` or ``SWEPT`` query).
+The sized searches (``sized_bucket_sort``, ``sized_bucket_swept``) are thin
+adapters onto the library's one pipeline (``jaxcontact._detect.at_sizes`` run
+with the ``CLOSEST`` or ``SWEPT`` query).
 """
-
-from types import SimpleNamespace
 
 import jax.numpy as jnp
 
 from jaxcontact import _normals, _track
 from jaxcontact._detect import at_sizes
-from jaxcontact._pipeline import candidates, driver, inputs, segments, writeback
+from jaxcontact._pipeline import driver
 from jaxcontact._pipeline import outline as _outline
-from jaxcontact._pipeline.broad import broad_phase, kept_rows, segment_boxes
-from jaxcontact._pipeline.cells import Grid, cell_entries, list_candidates, num_lists
-from jaxcontact._pipeline.geometry import squared_distance
-from jaxcontact._pipeline.narrow import search_all, search_listed, search_tiles, vmapped
+from jaxcontact._pipeline.broad import broad_phase, kept_rows
+from jaxcontact._pipeline.cells import list_candidates
+from jaxcontact._pipeline.inputs import check_surface
+from jaxcontact._pipeline.narrow import search_listed, search_tiles
 from jaxcontact._pipeline.pairs import EVERY_PAIR, ruled
-from jaxcontact._pipeline.sizes import largest, measure, measure_batch, with_entries
-from jaxcontact._pipeline.sort import packs, sorted_pairs, stable_order
-from jaxcontact._query.closest import CLOSEST, contact_from_choice
+from jaxcontact._pipeline.segments import resolve_segments
+from jaxcontact._pipeline.sizes import largest, measure, with_entries
+from jaxcontact._query.closest import CLOSEST
 from jaxcontact._query.swept import SWEPT
 from jaxcontact._timing import (
     Timing,
@@ -38,23 +37,6 @@ from jaxcontact._timing import (
     time_call,
     time_interleaved,
 )
-from jaxcontact._types import Contact
-
-# The two drivers' jitted programs (one cache each, shared by both queries).
-exhaustive = driver.exhaustive
-sized_jit = driver.sized_jit
-
-
-def contact_jit(x, surface, radius, mask, *, sizes, candidates=None, pairing=EVERY_PAIR):
-    """The closest-point bucket sort at ``sizes`` (jitted, inputs unchecked)."""
-    return driver.sized_jit(
-        CLOSEST, (x,), surface, radius, mask, sizes=sizes, candidates=candidates, pairs=pairing
-    )
-
-
-def crossing_jit(x_prev, x, surface, mask, *, sizes, pairing=EVERY_PAIR):
-    """The swept bucket sort at ``sizes`` (jitted, inputs unchecked)."""
-    return driver.sized_jit(SWEPT, (x_prev, x), surface, None, mask, sizes=sizes, pairs=pairing)
 
 
 def sized_bucket_sort(x, surface, *, radius, mask=None, sizes, candidates=None, pairs=None):
@@ -74,76 +56,28 @@ def measure_contacts(x, surface, radius, mask, sizes, slack):
     return with_entries(sizes, needed, slack)
 
 
-def empty_contact(template, overflow):
-    """A ``Contact`` of nothing found, with ``template``'s rows and dtype."""
-    return writeback.empty(Contact, template.shape[0], template.dtype, overflow)
-
-
-def write_blocks(result, blocks, empty, block_size):
-    """The kept blocks' rows written into ``empty``'s N rows."""
-    return writeback.write_blocks(result, blocks, empty, block_size)
-
-
-_bucket = SimpleNamespace(
-    contact_jit=contact_jit,
-    find=candidates.find,
-    find_jit=candidates.find_jit,
-    sized_bucket_sort=sized_bucket_sort,
-    sized_bucket_swept=sized_bucket_swept,
-)
-_dense = SimpleNamespace(
-    ROW_MULTIPLE=SWEPT.row_multiple,
-    _all_to_all=lambda x, surface, radius, mask, pairing=EVERY_PAIR: driver.exhaustive(
-        CLOSEST, (x,), surface, radius, mask, pairing
-    ),
-    _swept=lambda x_prev, x, surface, mask, pairing=EVERY_PAIR: driver.exhaustive(
-        SWEPT, (x_prev, x), surface, None, mask, pairing
-    ),
-)
-_inputs = SimpleNamespace(
-    check_surface=inputs.check_surface, resolve_segments=segments.resolve_segments
-)
-
 __all__ = [
-    "Grid",
+    "CLOSEST",
     "Timing",
-    "_bucket",
-    "_dense",
     "_elapsed",
-    "_inputs",
     "_normals",
     "_outline",
     "_track",
     "broad_phase",
-    "cell_entries",
+    "check_surface",
     "compiled_call",
-    "contact_from_choice",
-    "contact_jit",
-    "crossing_jit",
-    "empty_contact",
-    "exhaustive",
     "kept_rows",
     "largest",
     "list_candidates",
     "measure",
-    "measure_batch",
     "measure_contacts",
-    "num_lists",
-    "packs",
     "pinned_note",
+    "resolve_segments",
     "ruled",
-    "search_all",
     "search_listed",
     "search_tiles",
-    "segment_boxes",
-    "sized_jit",
     "sized_bucket_sort",
     "sized_bucket_swept",
-    "sorted_pairs",
-    "squared_distance",
-    "stable_order",
     "time_call",
     "time_interleaved",
-    "vmapped",
-    "write_blocks",
 ]

@@ -18,6 +18,7 @@ from benchmarks.harness import _run, answers, report, style
 from benchmarks.peer_codes import baselines
 from jaxcontact import Surface, swept
 from jaxcontact.scenes import cutting_scene, paper_scene, rough_die_scene
+from tests.support.tolerances import FLOAT64_EXACT_ATOL
 
 WRONG = "a peer that misses a contact"  # a test's own peer, in no figure's table
 NOWHERE = "a peer that is not installed"
@@ -92,7 +93,7 @@ def test_numba_swept_follows_the_contract_at_its_edge_cases():
     library = swept(x_prev, x, Surface(np.concatenate([start, end]), np.array([[0, 1]])))
     np.testing.assert_array_equal(crossed, np.asarray(library.crossed))
     np.testing.assert_array_equal(segment, np.asarray(library.segment))
-    np.testing.assert_allclose(t, np.asarray(library.t), atol=1e-15)
+    np.testing.assert_allclose(t, np.asarray(library.t), atol=FLOAT64_EXACT_ATOL)
     assert crossed.tolist() == [True, True, True, True, False, False, True, False]
 
 

@@ -18,9 +18,9 @@ import jaxcontact
 from jaxcontact import Pairs, Search, Surface, all_to_all, bucket_sort, bucket_swept, swept
 from jaxcontact._pipeline.outline import chains
 from jaxcontact._pipeline.segments import resolve_segments
-from tests.helpers import FLOAT, local_atol
-from tests.oracle import closest_point, oracle_chains, oracle_contact, oracle_crossing
-from tests.tolerances import FD_ATOL, FD_RTOL, FD_STEP, FLOAT32_SUM_ATOL, FLOAT32_SUM_RTOL
+from tests.support.helpers import FLOAT, local_atol
+from tests.support.oracle import closest_point, oracle_chains, oracle_contact, oracle_crossing
+from tests.support.tolerances import FD_ATOL, FD_RTOL, FD_STEP, FLOAT32_SUM_ATOL, FLOAT32_SUM_RTOL
 
 
 def ring(count: int, radius: float, centre, phase: float = 0.0) -> np.ndarray:

@@ -29,8 +29,8 @@ from jaxcontact import (
     track,
 )
 from jaxcontact.forces import Forces, Friction, coulomb, penalty
-from tests.helpers import FLOAT
-from tests.tolerances import (
+from tests.support.helpers import FLOAT
+from tests.support.tolerances import (
     DISSIPATION_SLACK,
     FD_SMOOTH_ATOL,
     FD_SMOOTH_RTOL,

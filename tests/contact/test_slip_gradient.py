@@ -19,7 +19,7 @@ import pytest
 
 import jaxcontact
 from jaxcontact.forces import Friction, coulomb
-from tests.tolerances import CLOSED_FORM_RTOL, FD_HISTORY_RTOL
+from tests.support.tolerances import CLOSED_FORM_RTOL, FD_HISTORY_RTOL
 
 pytestmark = pytest.mark.x64
 

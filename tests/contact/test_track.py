@@ -19,7 +19,7 @@ import pytest
 import jaxcontact
 from jaxcontact import Search, Surface, all_to_all
 from jaxcontact._track import WALK
-from tests.tolerances import FLOAT32_ATOL, SLIP_ATOL
+from tests.support.tolerances import FLOAT32_ATOL, SLIP_ATOL
 
 DEPTH = 0.01  # slaves sit this far inside the outline: in contact
 RADIUS = 0.05

@@ -1,4 +1,8 @@
-"""``all_to_all`` against the brute-force oracle, and each special case of docs/contract.md."""
+"""Each special case of docs/contract.md for ``all_to_all``, checked against the brute-force oracle.
+
+The random scenes, masks, padding and offsets run for both queries in tests/core/test_oracle.py,
+through this file's ``checked_scene``.
+"""
 
 import functools
 
@@ -12,20 +16,17 @@ from jaxcontact import Surface
 from jaxcontact._pipeline.geometry import edge, squared_distance
 from jaxcontact._pipeline.lowest import lowest_score
 from jaxcontact.scenes import paper_scene
-from tests import helpers
-from tests.oracle import oracle_contact
-from tests.tolerances import FLOAT32_RTOL, FLOAT32_SUM_RTOL
+from tests.support import helpers
+from tests.support.oracle import oracle_contact
+from tests.support.tolerances import FLOAT32_RTOL, FLOAT32_SUM_RTOL
 
-# All of this file runs again with x64 off (tests/test_x64_off.py), the
-# sweep over random scenes' sizes at one size.
+# All of this file runs again with x64 off (tests/test_x64_off.py).
 pytestmark = pytest.mark.x64_off
 
 # Jitted once at module level so scenes of equal shapes share one compilation.
 all_to_all = jax.jit(jaxcontact.all_to_all)
 
 DTYPES = pytest.mark.parametrize("dtype", helpers.FLOAT_DTYPES, ids=lambda d: np.dtype(d).name)
-# Cases that only add shapes: with x64 off one of them runs (see their test).
-ON_X64 = pytest.mark.skipif(not helpers.X64, reason="x64 off runs the 9-5 size only")
 
 # A counter-clockwise unit square: normals point out of it.
 SQUARE_NODES = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]
@@ -54,34 +55,6 @@ def checked_scene(scene: helpers.Scene, **tolerance):
         contact, helpers.contact_oracle(scene), scene.x.dtype, **tolerance
     )
     return contact
-
-
-# Sizes in the widest float only (float32 random scenes are compared below
-# and in test_transforms.py): each size is a compilation. With x64 off
-# (tests/test_x64_off.py), the largest only: what x64 changes is the index
-# dtypes, not the shapes, and empty inputs run with x64 off in
-# tests/core/test_validation.py.
-@pytest.mark.parametrize(
-    "num_slaves, num_segments",
-    [
-        pytest.param(n, m, marks=[] if (n, m) == (9, 5) else ON_X64)
-        for n in (0, 1, 9)
-        for m in (0, 1, 5)
-    ],
-)
-def test_matches_oracle_on_random_masked_scenes(num_slaves, num_segments):
-    for seed in range(4):
-        scene = helpers.random_scene(seed, num_slaves, num_segments, masked=True)
-        checked_scene(scene)
-
-
-def test_matches_oracle_on_random_scenes_without_masks():
-    found = 0
-    for seed in range(4):
-        scene = helpers.random_scene(seed, 9, 5)
-        found += int(checked_scene(scene).found.sum())
-    # The scenes must exercise both outcomes for the comparison to mean anything.
-    assert 0 < found < 4 * 9
 
 
 def test_first_index_wins_a_tie_across_segment_blocks():
@@ -272,23 +245,6 @@ def test_only_zero_length_segments_find_nothing():
     np.testing.assert_array_equal(contact.segment, [-1])
 
 
-@pytest.mark.parametrize("masked", ["slaves", "segments"])
-def test_everything_masked_finds_nothing(masked):
-    scene = helpers.everything_masked(masked)
-    contact = checked_scene(scene._replace(radius=100.0))
-    assert not contact.found.any() and not contact.active.any()
-    np.testing.assert_array_equal(contact.segment, np.full(9, -1))
-    for field in (contact.gap, contact.xi, contact.point, contact.normal):
-        np.testing.assert_array_equal(field, np.zeros_like(field))
-
-
-@pytest.mark.parametrize("fill", [np.nan, np.inf, -np.inf], ids=["nan", "inf", "-inf"])
-def test_nan_and_inf_padding_leaves_real_rows_unchanged(fill):
-    helpers.assert_padding_leaves_real_rows_unchanged(
-        checked_scene, fill, ("gap", "xi", "point", "normal", "found", "active"), "found"
-    )
-
-
 @DTYPES
 def test_radius_boundary_is_inclusive(dtype):
     beyond = np.nextafter(dtype(0.25), dtype(1))
@@ -318,17 +274,3 @@ def test_zero_radius_finds_only_slaves_on_the_surface(dtype):
     contact = checked_contact(slaves, [[2.0, 0.0], [0.0, 0.0]], [[0, 1]], radius=0.0, dtype=dtype)
     np.testing.assert_array_equal(contact.found, [True, True, True, False, False])
     np.testing.assert_array_equal(contact.gap, np.zeros(5))
-
-
-@pytest.mark.parametrize("offset", [1e4, 1e6])
-def test_float32_far_from_origin_keeps_local_accuracy(offset):
-    # The oracle runs in float64 on the very same float32 inputs, so it is the
-    # exact answer for them. Gap and xi are functions of differences of nearby
-    # inputs (exact in float32 by Sterbenz's lemma), so their error can stay at
-    # a few ulps of the local geometry, whatever the offset. The point is a
-    # coordinate near ``offset``: the exact closest point is generally not a
-    # float32 number, so rounding it alone costs up to half an ulp of
-    # ``offset``; one ulp (plus the local error) is the honest bound.
-    for seed in range(4):
-        scene = helpers.random_scene(seed, 9, 5, np.float32, masked=True, offset=offset, scale=2.0)
-        checked_scene(scene, scale=2.0, offset=offset)

@@ -23,7 +23,7 @@ from jaxcontact import (
     bucket_swept,
     swept,
 )
-from tests.helpers import local_atol
+from tests.support.helpers import local_atol
 
 PACKAGE = pathlib.Path(jaxcontact.__file__).resolve().parent
 # The public names that are submodules.

@@ -14,8 +14,8 @@ from jaxcontact import (
 )
 from jaxcontact._pipeline.sizes import measure
 from jaxcontact.scenes import cutting_scene, rough_die_scene
-from tests.helpers import FLOAT, assert_same_contact, assert_same_crossing, penalty_total
-from tests.tolerances import FLOAT64_BATCHED_RTOL, FLOAT64_RTOL
+from tests.support.helpers import FLOAT, assert_same_contact, assert_same_crossing, penalty_total
+from tests.support.tolerances import FLOAT64_BATCHED_RTOL, FLOAT64_RTOL
 
 # The tool in, half in and clear of the workpiece: very different needs.
 TIPS = (12.0, 18.0, 20.5)

@@ -32,7 +32,7 @@ from jaxcontact._pipeline import candidates as _candidates
 from jaxcontact._pipeline.sizes import largest, measure
 from jaxcontact._types import CHUNK_ROWS
 from jaxcontact.scenes import curling_chip, cutting_scene, paper_scene, rough_die_scene
-from tests.helpers import (
+from tests.support.helpers import (
     FLOAT,
     MODE_DTYPES,
     assert_same_contact,

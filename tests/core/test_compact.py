@@ -28,7 +28,7 @@ from jaxcontact._pipeline import driver
 from jaxcontact._query.closest import CLOSEST
 from jaxcontact.scenes import cutting_scene, rough_die_scene
 from tests.core.test_search import NUM_STEPS, RADIUS, SKIN, surface_at, trajectory
-from tests.helpers import (
+from tests.support.helpers import (
     FLOAT,
     assert_same_contact,
     assert_same_crossing,

@@ -15,9 +15,9 @@ import pytest
 
 import jaxcontact
 from jaxcontact import Sizes, Surface
-from tests.exact_checks import ULPS, check_contact
-from tests.helpers import Scene, sized_bucket_sort
-from tests.tolerances import CORNER_OFFSET_ATOL, FLOAT32_RTOL
+from tests.support.exact_checks import ULPS, check_contact
+from tests.support.helpers import Scene, sized_bucket_sort
+from tests.support.tolerances import CORNER_OFFSET_ATOL, FLOAT32_RTOL
 
 # An L, counter-clockwise: convex corners and one concave corner, at (1, 1).
 L_NODES = np.array([[0, 0], [2, 0], [2, 1], [1, 1], [1, 2], [0, 2]], np.float64)

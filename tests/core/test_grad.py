@@ -8,8 +8,8 @@ from jax.test_util import check_grads
 
 import jaxcontact
 from jaxcontact import Surface
-from tests.oracle import oracle_contact, oracle_crossing
-from tests.tolerances import FLOAT64_EXACT_ATOL
+from tests.support.oracle import oracle_contact, oracle_crossing
+from tests.support.tolerances import FLOAT64_EXACT_ATOL
 
 MODES = pytest.mark.parametrize("mode", ["fwd", "rev"])
 

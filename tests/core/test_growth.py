@@ -12,7 +12,7 @@ import pytest
 
 from jaxcontact import Search, Surface, all_to_all, resumable_scan
 from jaxcontact.scenes import cutting_scene, rough_die_scene
-from tests.helpers import FLOAT, assert_same_contact
+from tests.support.helpers import FLOAT, assert_same_contact
 
 NUM_SEGMENTS = 100
 POOL = slice(40, 60)

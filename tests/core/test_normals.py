@@ -19,7 +19,7 @@ from jax.test_util import check_grads
 
 from jaxcontact import Search, Smooth, Surface, all_to_all, bucket_sort
 from jaxcontact.forces import penalty
-from tests.helpers import FLOAT, assert_same_contact, local_atol
+from tests.support.helpers import FLOAT, assert_same_contact, local_atol
 
 TURN = 7.5  # degrees: the turn at each inner vertex of the arc
 ARC = 24  # arc segments: 0..23; then the top (24), the back (25), the bottom (26), padding

@@ -24,9 +24,9 @@ from hypothesis import strategies as st
 
 import jaxcontact
 from jaxcontact import Sizes, Surface
-from tests import oracle
-from tests.exact_checks import ULPS, check_contact, check_crossing
-from tests.helpers import (
+from tests.support import oracle
+from tests.support.exact_checks import ULPS, check_contact, check_crossing
+from tests.support.helpers import (
     Scene,
     assert_all_finite,
     blind_spot,

@@ -18,6 +18,7 @@ from jaxcontact._pipeline.pairs import EVERY_PAIR
 from jaxcontact._pipeline.sizes import measure, room_for_every_slot
 from jaxcontact._query.closest import Closest
 from jaxcontact.scenes import rough_die_scene
+from tests.support.tolerances import FLOAT64_RTOL
 
 
 class NearestNode(NamedTuple):
@@ -93,7 +94,9 @@ def _check(result, expected):
     distance, vertex, found = expected
     np.testing.assert_array_equal(np.asarray(result.found), found)
     assert found.any() and not found.all()
-    np.testing.assert_allclose(np.asarray(result.distance)[found], distance[found], rtol=1e-12)
+    np.testing.assert_allclose(
+        np.asarray(result.distance)[found], distance[found], rtol=FLOAT64_RTOL
+    )
     np.testing.assert_array_equal(np.asarray(result.vertex)[found], vertex[found])
 
 

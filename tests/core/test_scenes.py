@@ -9,8 +9,8 @@ import pytest
 
 import jaxcontact
 from jaxcontact.scenes import cutting_scene, cutting_tool_outline, paper_scene, rough_die_scene
-from tests import helpers
-from tests.tolerances import FLOAT32_SUM_ATOL, FLOAT64_RTOL
+from tests.support import helpers
+from tests.support.tolerances import FLOAT32_SUM_ATOL, FLOAT64_RTOL
 
 DTYPES = pytest.mark.parametrize("dtype", helpers.FLOAT_DTYPES, ids=lambda d: np.dtype(d).name)
 

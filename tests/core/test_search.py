@@ -23,7 +23,7 @@ from jaxcontact import (
     swept,
 )
 from jaxcontact.scenes import cutting_scene
-from tests.helpers import FLOAT, assert_same_contact, assert_same_crossing, gradient_atol
+from tests.support.helpers import FLOAT, assert_same_contact, assert_same_crossing, gradient_atol
 
 RADIUS, SKIN = 0.1, 0.05
 TOOL_STEP = 0.02  # the tool's travel per step; with the workpiece's motion, about half the skin

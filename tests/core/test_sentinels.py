@@ -32,7 +32,7 @@ from jaxcontact import (
 )
 from jaxcontact._pipeline.candidates import Candidates
 from jaxcontact._pipeline.sizes import measure
-from tests.helpers import FLOAT, local_atol, penalty_total
+from tests.support.helpers import FLOAT, local_atol, penalty_total
 
 RADIUS = 0.25
 # A floor listed right to left (normals up) with two corners, and node 4,

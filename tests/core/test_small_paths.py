@@ -20,7 +20,7 @@ from jaxcontact._pipeline.lowest import lowest_score
 from jaxcontact._pipeline.narrow import _lowest_in_plane
 from jaxcontact._pipeline.segments import resolve_segments
 from jaxcontact._types import Surface
-from tests import helpers
+from tests.support import helpers
 
 pytestmark = pytest.mark.x64_off
 

@@ -1,4 +1,8 @@
-"""``swept`` against the brute-force oracle, and each special case of docs/contract.md."""
+"""Each special case of docs/contract.md for ``swept``, checked against the brute-force oracle.
+
+The random scenes, masks, padding and offsets run for both queries in tests/core/test_oracle.py,
+through this file's ``checked_scene``.
+"""
 
 import jax
 import jax.numpy as jnp
@@ -6,18 +10,15 @@ import numpy as np
 import pytest
 
 import jaxcontact
-from tests import helpers
+from tests.support import helpers
 
-# All of this file runs again with x64 off (tests/test_x64_off.py), the
-# sweep over random scenes' sizes at one size.
+# All of this file runs again with x64 off (tests/test_x64_off.py).
 pytestmark = pytest.mark.x64_off
 
 # Jitted once at module level so scenes of equal shapes share one compilation.
 swept = jax.jit(jaxcontact.swept)
 
 DTYPES = pytest.mark.parametrize("dtype", helpers.FLOAT_DTYPES, ids=lambda d: np.dtype(d).name)
-# Cases that only add shapes: with x64 off one of them runs (see their test).
-ON_X64 = pytest.mark.skipif(not helpers.X64, reason="x64 off runs the 9-5 size only")
 
 # A vertical wall from (1, 0) to (1, 2).
 WALL_NODES, WALL_SEGMENTS = [[1.0, 0.0], [1.0, 2.0]], [[0, 1]]
@@ -51,32 +52,6 @@ def assert_crossings(crossing, segment, t, point):
     np.testing.assert_array_equal(crossing.crossed, np.asarray(segment) >= 0)
     np.testing.assert_array_equal(crossing.t, np.asarray(t, crossing.t.dtype))
     np.testing.assert_array_equal(crossing.point, np.asarray(point, crossing.point.dtype))
-
-
-# Sizes in the widest float only (float32 random scenes are compared below
-# and in test_transforms.py): each size is a compilation. With x64 off
-# (tests/test_x64_off.py), the largest only: what x64 changes is the index
-# dtypes, not the shapes, and empty inputs run with x64 off in
-# tests/core/test_validation.py.
-@pytest.mark.parametrize(
-    "num_slaves, num_segments",
-    [
-        pytest.param(n, m, marks=[] if (n, m) == (9, 5) else ON_X64)
-        for n in (0, 1, 9)
-        for m in (0, 1, 5)
-    ],
-)
-def test_matches_oracle_on_random_masked_scenes(num_slaves, num_segments):
-    for seed in range(4):
-        checked_scene(helpers.random_scene(seed, num_slaves, num_segments, masked=True))
-
-
-def test_matches_oracle_on_random_scenes_without_masks():
-    crossed = 0
-    for seed in range(4):
-        crossed += int(checked_scene(helpers.random_scene(seed, 9, 5)).crossed.sum())
-    # The scenes must exercise both outcomes for the comparison to mean anything.
-    assert 0 < crossed < 4 * 9
 
 
 @DTYPES
@@ -211,32 +186,3 @@ def test_zero_length_segment_is_ignored():
     nodes = [[1.0, 1.0], [1.0, 1.0], [3.0, 0.0], [3.0, 2.0]]
     crossing = checked_crossing([[0.0, 1.0]], [[4.0, 1.0]], nodes, [[0, 1], [2, 3]])
     assert_crossings(crossing, [1], [0.75], [[3.0, 1.0]])
-
-
-@pytest.mark.parametrize("masked", ["slaves", "segments"])
-def test_everything_masked_crosses_nothing(masked):
-    scene = helpers.everything_masked(masked)
-    crossing = checked_scene(scene)
-    assert not crossing.crossed.any()
-    np.testing.assert_array_equal(crossing.segment, np.full(9, -1))
-    np.testing.assert_array_equal(crossing.t, np.zeros(9))
-    np.testing.assert_array_equal(crossing.point, np.zeros((9, 2)))
-
-
-@pytest.mark.parametrize("fill", [np.nan, np.inf, -np.inf], ids=["nan", "inf", "-inf"])
-def test_nan_and_inf_padding_leaves_real_rows_unchanged(fill):
-    helpers.assert_padding_leaves_real_rows_unchanged(
-        checked_scene, fill, ("t", "point", "crossed"), "crossed"
-    )
-
-
-@pytest.mark.parametrize("offset", [1e4, 1e6])
-def test_float32_far_from_origin_keeps_local_accuracy(offset):
-    # As for all_to_all: the oracle is exact for the float32 inputs; t comes
-    # from cross products of differences of nearby inputs, so its error is a
-    # few ulps relative to the local geometry; the crossing point is a
-    # coordinate near ``offset`` and cannot beat its own rounding there, so it
-    # gets one ulp of ``offset`` on top.
-    for seed in range(4):
-        scene = helpers.random_scene(seed, 9, 5, np.float32, masked=True, offset=offset, scale=2.0)
-        checked_scene(scene, offset=offset)

@@ -17,7 +17,7 @@ from jaxcontact import Pairs, Search, all_to_all, swept
 from jaxcontact._pipeline import narrow
 from jaxcontact._pipeline.sizes import measure
 from jaxcontact.scenes import curling_chip, rough_die_scene
-from tests.helpers import (
+from tests.support.helpers import (
     FLOAT,
     assert_same_contact,
     assert_same_crossing,

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import jaxcontact
-from tests import helpers
+from tests.support import helpers
 
 DTYPES = pytest.mark.parametrize("dtype", helpers.FLOAT_DTYPES, ids=lambda d: np.dtype(d).name)
 BATCH = 3

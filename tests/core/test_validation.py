@@ -11,7 +11,7 @@ import pytest
 import jaxcontact
 from jaxcontact import Search, Surface
 from jaxcontact._pipeline.sizes import measure
-from tests.helpers import X64
+from tests.support.helpers import X64
 
 # All of this file runs again with x64 off (tests/test_x64_off.py).
 pytestmark = pytest.mark.x64_off

@@ -1,4 +1,4 @@
-"""The orthogonal cutting simulation (``jaxcontact.sim.cutting``) on small meshes.
+"""The orthogonal cutting simulation (``jaxcontact.problems.cutting``) on small meshes.
 
 A coarse cut (two element rows in the uncut layer) is enough to check what
 the simulation promises: a chip forms and leaves along the rake face, the
@@ -23,7 +23,7 @@ from jaxcontact.problems import cutting
 from jaxcontact.problems.cutting import demo as cutting_demo
 from jaxcontact.sim import explicit, materials
 from jaxcontact.sim.elements import q4
-from tests.tolerances import (
+from tests.support.tolerances import (
     FD_RUN_RTOL,
     FLOAT32_ATOL,
     FLOAT32_RTOL,

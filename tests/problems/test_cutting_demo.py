@@ -12,7 +12,7 @@ from jaxcontact import _cli
 from jaxcontact.problems import cutting
 from jaxcontact.problems.cutting import demo as cutting_demo
 from tests.problems.test_machining import KIENZLE_BAND_AT_0_1_MM
-from tests.tolerances import HAND_FIGURE_RTOL
+from tests.support.tolerances import HAND_FIGURE_RTOL
 
 # What summary.json must hold (cutting.summary's keys and the demo's own).
 REQUIRED = {

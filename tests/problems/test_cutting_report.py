@@ -15,7 +15,7 @@ import pytest
 
 from jaxcontact.problems import cutting
 from jaxcontact.problems.cutting import demo as cutting_demo
-from tests.tolerances import STEADY_FIT_RTOL
+from tests.support.tolerances import STEADY_FIT_RTOL
 
 ROWS = 6000  # rows of a synthetic history: 0.6 mm of travel
 SPACING = 0.01  # mm: one "element" of travel, 100 rows

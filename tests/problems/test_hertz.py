@@ -1,4 +1,4 @@
-"""A rigid cylinder pressed into an elastic block against Hertz (jaxcontact.sim.hertz).
+"""A rigid cylinder pressed into an elastic block against Hertz (jaxcontact.problems.hertz).
 
 One solve of the small mesh (12 elements across the contact width 2a) is shared
 by the checks: it compiles the equilibrium program once, which the central
@@ -17,7 +17,7 @@ from jaxcontact import _cli
 from jaxcontact.problems import hertz
 from jaxcontact.sim.elements.triangle import internal_forces, strain_energy
 from jaxcontact.sim.materials import Elastic
-from tests.tolerances import (
+from tests.support.tolerances import (
     CLOSED_FORM_RTOL,
     FLOAT64_RTOL,
     FLOAT64_STEPS_RTOL,

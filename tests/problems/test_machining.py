@@ -7,7 +7,7 @@ import math
 import pytest
 
 from jaxcontact.problems.cutting import machining
-from tests.tolerances import FLOAT64_RTOL, HAND_FIGURE_RTOL
+from tests.support.tolerances import FLOAT64_RTOL, HAND_FIGURE_RTOL
 
 
 @pytest.mark.parametrize("rake, beta", [(0.0, 30.0), (-7.0, 25.0), (5.0, 40.0)])

@@ -24,7 +24,7 @@ from jaxcontact.problems.ploughing import (
 )
 from jaxcontact.problems.ploughing.demo import run_demo
 from jaxcontact.scenes import cutting_tool_outline
-from tests.tolerances import FLOAT64_RTOL, FLOAT64_STEPS_RTOL, RERUN_ATOL
+from tests.support.tolerances import FLOAT64_RTOL, FLOAT64_STEPS_RTOL, RERUN_ATOL
 
 pytestmark = [pytest.mark.simulation, pytest.mark.slow, pytest.mark.x64]
 

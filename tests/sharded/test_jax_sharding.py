@@ -37,7 +37,7 @@ from jaxcontact import (
 from jaxcontact._pipeline import driver
 from jaxcontact._query.closest import CLOSEST
 from jaxcontact.forces import Forces, penalty
-from tests.helpers import local_atol
+from tests.support.helpers import local_atol
 
 RADIUS = 0.25
 SKIN = 0.1

@@ -22,7 +22,7 @@ import jaxcontact
 from jaxcontact.forces import penalty
 from jaxcontact.sim import explicit, materials
 from jaxcontact.sim.elements import q4
-from tests.tolerances import EXPLICIT_AREA_RTOL, EXPLICIT_FORCE_RTOL, EXPLICIT_HEAT_ATOL
+from tests.support.tolerances import EXPLICIT_AREA_RTOL, EXPLICIT_FORCE_RTOL, EXPLICIT_HEAT_ATOL
 
 pytestmark = pytest.mark.x64
 

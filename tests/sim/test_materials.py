@@ -16,7 +16,7 @@ import pytest
 from jax.test_util import check_grads
 
 from jaxcontact.sim.materials import AISI_1045, PointState, von_mises
-from tests.tolerances import (
+from tests.support.tolerances import (
     FD_MATERIAL_STEP,
     FD_RTOL,
     FLOAT64_RTOL,

@@ -13,7 +13,7 @@ import pytest
 import jaxcontact
 from jaxcontact.sim import coupling, explicit, materials, tools
 from jaxcontact.sim.elements import q4
-from tests.tolerances import FLOAT32_ATOL, FLOAT64_RTOL
+from tests.support.tolerances import FLOAT32_ATOL, FLOAT64_RTOL
 
 TOOL_FIELDS = {"edge_radius": 0.05, "clearance": 7.0, "rake_face": 1.0, "flank": 0.5}
 TOOL = tools.Tool(**TOOL_FIELDS, arc_segments=12)

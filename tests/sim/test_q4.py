@@ -15,7 +15,7 @@ import pytest
 
 from jaxcontact.sim import materials
 from jaxcontact.sim.elements import q4
-from tests.tolerances import FLOAT64_EXACT_ATOL, FLOAT64_RTOL, FORCE_ATOL
+from tests.support.tolerances import FLOAT64_EXACT_ATOL, FLOAT64_RTOL, FORCE_ATOL
 
 pytestmark = pytest.mark.x64
 

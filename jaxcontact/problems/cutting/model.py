@@ -50,7 +50,7 @@ mesh with its parting line, node separation and the two tool outlines
   outlines, 2 edge radii apart, told apart by ``Search``'s bodies).
 * **Contact**: two searches a step, because a node at the edge touches the
   tool and the workpiece at once, and a closest-point search gives each
-  slave one segment. ``Search(track=True, normals="smooth")`` finds every
+  slave one segment. ``Search(track=True, normals=Smooth())`` finds every
   node's contact with the tool; ``forces.coulomb`` gives the penalty and the
   friction from the slip history, its reaction on the tool's nodes the
   cutting force. Friction is Coulomb's ``mu`` times the pressure, capped at
@@ -338,7 +338,7 @@ def setup(cut: Cutting) -> tuple[Model, State]:
     # there), and a closest-point search gives each slave its one closest
     # segment: one search per master gives each node its contact with each.
     tool_search = jaxcontact.Search(
-        radius=cut.radius, method="exhaustive", track=True, normals="smooth"
+        radius=cut.radius, method="exhaustive", track=True, normals=jaxcontact.Smooth()
     )
     own_search = jaxcontact.Search(radius=cut.radius, method="exhaustive")
     start_x = float(mesh.quads.nodes[:, 0].max()) + cut.edge_radius + 0.5 * cut.element
@@ -369,9 +369,10 @@ def contacts(model: Model, tool_state, own_state, x, lowest_x, rake, released, a
     (benchmarks/simulations.py's ``detection_share``)."""
     mesh = model.mesh
     tool = tool_surface(model.cut, lowest_x, rake)
-    on_tool, tool_state, slip = model.tool_search.closest(
+    on_tool, tool_state = model.tool_search.closest(
         tool_state, x, tool, mask=kept, pairs=jaxcontact.Pairs(slave_body=mesh.side)
     )
+    slip = tool_state.slip
     own = own_surface(mesh, x, released, alive)
     on_own, own_state = model.own_search.closest(
         own_state,

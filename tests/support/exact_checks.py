@@ -2,7 +2,7 @@
 
 Shared by the property tests (tests/core/test_properties.py) and the continuity
 tests (tests/core/test_continuity.py), on the suite's one scene type
-(``tests.helpers.Scene``), without a slave mask.
+(``tests.support.helpers.Scene``), without a slave mask.
 
 Error bounds (``ULPS`` = 8 units of eps of the dtype):
 
@@ -45,9 +45,9 @@ import math
 import jax
 import numpy as np
 
-from tests import oracle
-from tests.helpers import Scene, assert_all_finite
-from tests.tolerances import EXACT_ULPS as ULPS
+from tests.support import oracle
+from tests.support.helpers import Scene, assert_all_finite
+from tests.support.tolerances import EXACT_ULPS as ULPS
 
 
 def _unmasked(scene: Scene) -> Scene:

@@ -1,9 +1,10 @@
 """Every tolerance of the suite, named, each with the reason for its size.
 
-Tests import them from here (or through tests/helpers.py, which builds the
+Tests import them from here (or through tests/support/helpers.py, which builds the
 per-dtype bounds of the detectors' geometry from the first group). A literal
 in a test that is not from here is not a tolerance (a size, a coordinate, a
-step). ``eps``: float32's is 1.2e-7, float64's 2.2e-16.
+step). tests/test_tolerances.py fails on a tolerance keyword given a literal
+elsewhere. ``eps``: float32's is 1.2e-7, float64's 2.2e-16.
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ import numpy as np
 # Gaps, projections, crossing times: a handful of operations on differences of
 # the inputs, each within eps/2 of the local scale (helpers.local_atol).
 LOCAL_ULPS = {np.dtype(np.float32): 8, np.dtype(np.float64): 8}
-# The exact-oracle bounds (tests/exact_checks.py): the same count, per term.
+# The exact-oracle bounds (tests/support/exact_checks.py): the same count, per term.
 EXACT_ULPS = 8
 # A detector's and the dense form's gradients of one pair: two programs that
 # contract into fused multiply-adds differently (1e-12 in float64).
@@ -31,6 +32,9 @@ FLOAT64_EXACT_ATOL = 1e-15
 # A float64 formula evaluated in another order or split over devices: a few
 # thousand eps, far below any modelling error.
 FLOAT64_RTOL = 1e-12
+# O(1-10) float64 values (gaps, forces) computed two ways, or summed in another
+# order: a few thousand eps of their scale.
+FLOAT64_ATOL = 1e-12
 # The same float64 program batched (vmap) and not: fused differently, then
 # through a gradient's few hundred operations.
 FLOAT64_BATCHED_RTOL = 1e-10
@@ -63,6 +67,20 @@ HAND_FIGURE_RTOL = 1e-4
 # force history (the steady window, the dips), against their closed forms:
 # sums whose rounding grows with the rows, far below any modelling question.
 STEADY_FIT_RTOL = 1e-9
+# A least-squares slope in log-log of values that do not change: zero but for
+# the float64 rounding of their logarithms.
+FLAT_SLOPE_ATOL = 1e-9
+
+# --- The benchmarks' records ---------------------------------------------------
+
+# A force trace's last point against the run's travel: the point is the mean
+# travel over the last of the trace's runs of steps, short of the end by about
+# half a run (1/600 of the travel at 300 points), far inside this.
+TRACE_END_RTOL = 0.02
+# The mean of a trace's points past a travel against the summary's force,
+# averaged over its own steady window: two windows over an oscillating force
+# (chip segmentation), a few percent apart.
+TRACE_MEAN_RTOL = 0.1
 
 # --- Finite differences ------------------------------------------------------
 
@@ -105,7 +123,7 @@ CORNER_OFFSET_ATOL = 1e-3
 # units of k_t times the slip scale squared.
 DISSIPATION_SLACK = 1e-5
 # A cylinder pressed into an elastic block against Hertz's line contact (issue
-# 43, tests/sim/test_hertz.py), at 12 elements across the contact: the FE a and
+# 43, tests/problems/test_hertz.py), at 12 elements across the contact: the FE a and
 # p0 against Hertz's, and the relative L2 error of the nodal pressures over the
 # contact, are the issue's targets.
 HERTZ_RTOL = 0.03

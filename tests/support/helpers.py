@@ -1,6 +1,6 @@
 """Per-dtype tolerances and the field-by-field comparison with the oracle.
 
-Every tolerance in the suite comes from tests/tolerances.py (re-exported
+Every tolerance in the suite comes from tests/support/tolerances.py (re-exported
 here). The detectors' geometry bounds below are built from its first group,
 counted in units in the last place (ulps) of a length that the test names:
 
@@ -29,9 +29,9 @@ from jaxcontact._detect import at_sizes
 from jaxcontact._query.closest import CLOSEST
 from jaxcontact._query.swept import SWEPT
 from jaxcontact.forces import penalty
-from tests.oracle import OracleContact, OracleCrossing, oracle_contact, oracle_crossing
-from tests.tolerances import *  # noqa: F403 (the table, re-exported)
-from tests.tolerances import BINNED_ULPS, GRADIENT_EPS, LOCAL_ULPS
+from tests.support.oracle import OracleContact, OracleCrossing, oracle_contact, oracle_crossing
+from tests.support.tolerances import *  # noqa: F403 (the table, re-exported)
+from tests.support.tolerances import BINNED_ULPS, GRADIENT_EPS, LOCAL_ULPS
 
 FLOAT_DTYPES = (np.float32, np.float64)
 

@@ -1,6 +1,6 @@
 """Where the suite's time goes: XLA compiles per test (a pytest plugin, opt-in).
 
-``python -m pytest -q -n 2 -p tests.compile_log`` prints, at the end, the
+``python -m pytest -q -n 2 -p tests.support.compile_log`` prints, at the end, the
 number of XLA compilations and their seconds, the tests that compiled most,
 and per jitted function how many programs it compiled and in how many xdist
 workers (many programs of one function: candidates for a shared shape).
