@@ -16,7 +16,7 @@ import pathlib
 
 TESTS = pathlib.Path(__file__).resolve().parent
 TABLE = TESTS / "support" / "tolerances.py"
-NOT_YET = ("sim", "problems")
+NOT_YET: tuple[str, ...] = ()
 KEYWORDS = {"atol", "rtol", "rel", "abs"}
 # Function name -> the positions (after the compared values) of its tolerances.
 POSITIONS = {"assert_allclose": (2, 3), "allclose": (2, 3), "isclose": (2, 3), "approx": (1, 2)}

@@ -356,7 +356,7 @@ def test_the_wheel_lists_every_package_of_the_library_and_nothing_else():
     import re
 
     pyproject = (PACKAGE.parent / "pyproject.toml").read_text()
-    (line,) = re.findall(r"^packages = \[(.*)\]$", pyproject, flags=re.M)
+    (line,) = re.findall(r"^packages = \[(.*?)\]$", pyproject, flags=re.M | re.S)
     listed = set(re.findall(r'"([\w.]+)"', line))
     found = {_module_name(path) for path in PACKAGE.rglob("__init__.py")}
     assert listed == found

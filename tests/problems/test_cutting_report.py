@@ -15,7 +15,7 @@ import pytest
 
 from jaxcontact.problems import cutting
 from jaxcontact.problems.cutting import demo as cutting_demo
-from tests.support.tolerances import STEADY_FIT_RTOL
+from tests.support.tolerances import STEADY_FIT_RTOL, STEADY_MEAN_RTOL
 
 ROWS = 6000  # rows of a synthetic history: 0.6 mm of travel
 SPACING = 0.01  # mm: one "element" of travel, 100 rows
@@ -70,7 +70,7 @@ def test_a_ramp_then_a_plateau_is_steady_from_near_the_plateau():
     # A window may take in the ramp's last stretch while its line stays within
     # 5 %: the start is where the drift allows, the mean within 1 % of the plateau.
     assert 0.14 < start <= 0.2 + SPACING
-    assert window.mean[0] == pytest.approx(200.0, rel=0.01)
+    assert window.mean[0] == pytest.approx(200.0, rel=STEADY_MEAN_RTOL)
     # A tighter tolerance starts it later, nearer the plateau.
     tighter = cutting.steady_window(travel, force, SPACING, tolerance=0.005)
     assert tighter.steady and start < travel[tighter.start] <= 0.2 + SPACING

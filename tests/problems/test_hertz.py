@@ -21,12 +21,14 @@ from tests.support.tolerances import (
     CLOSED_FORM_RTOL,
     FLOAT64_RTOL,
     FLOAT64_STEPS_RTOL,
+    FORCE_ATOL,
     HERTZ_FD_RTOL,
     HERTZ_FORCE_RTOL,
     HERTZ_GRADIENT_RTOL,
     HERTZ_L2,
     HERTZ_PENETRATION,
     HERTZ_RTOL,
+    MIDPOINT_RULE_RTOL,
 )
 
 pytestmark = [pytest.mark.x64]
@@ -57,7 +59,7 @@ def test_hertz_is_johnsons_line_contact(problem):
     edges = np.linspace(-exact.half_width, exact.half_width, 200_001)
     middles = (edges[1:] + edges[:-1]) / 2
     carried = float(np.sum(exact.pressure(middles)) * (edges[1] - edges[0]))
-    assert carried == pytest.approx(problem.force, rel=1e-6)  # the rule's error at the ends
+    assert carried == pytest.approx(problem.force, rel=MIDPOINT_RULE_RTOL)
     assert exact.pressure(1.01 * exact.half_width) == 0
 
 
@@ -95,7 +97,7 @@ def test_strain_energy_is_the_internal_forces_potential():
     material = Elastic(young=70_000.0, poisson=0.33)
     u = 1e-3 * jax.random.normal(jax.random.key(0), block.mesh.nodes.shape, jnp.float64)
     forces = -jax.grad(strain_energy, argnums=1)(block.mesh, u, material)
-    np.testing.assert_allclose(forces, internal_forces(block.mesh, u, material), atol=1e-9)
+    np.testing.assert_allclose(forces, internal_forces(block.mesh, u, material), atol=FORCE_ATOL)
     energy = float(strain_energy(block.mesh, u, material))
     assert energy == pytest.approx(-0.5 * float(jnp.sum(u * forces)), rel=FLOAT64_RTOL)
 

@@ -418,7 +418,7 @@ def sized_bucket_swept(x_prev, x, surface, *, mask=None, sizes, pairs=None):
     return at_sizes(SWEPT, (x_prev, x), surface, None, mask, sizes, pairs=pairs)
 
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]  # the repository: tests/support/helpers.py
 
 
 def assert_pytest_passes_in_subprocess(args, env, timeout=900):

@@ -11,13 +11,13 @@ import dataclasses
 from jaxcontact.sim import tools
 from jaxcontact.sim.materials import STEEL, Elastic
 
-# Steel with its density scaled by 10^4: the default workpiece (``model``'s docstring says why).
 MASS_SCALED_STEEL = STEEL._replace(mass_scale=1e4)
+"""Steel with its density scaled by 10^4: the default workpiece (``model``'s docstring says why)."""
 
-# The cutting scene's tool (docs/scenes.md): a 7° clearance, faces 3 mm from
-# the tip, an edge of radius 0.05 drawn by 16 segments, the tip at height 4
-# (a depth of cut of 1 in a workpiece 5 high).
 SCENE_TOOL = tools.Tool(edge_radius=0.05, clearance=7.0, rake_face=3.0, flank=3.0, arc_segments=16)
+"""The cutting scene's tool (docs/scenes.md): a 7° clearance, faces 3 mm from the tip, an edge
+of radius 0.05 drawn by 16 segments, the tip at ``TIP_HEIGHT`` = 4 (a depth of cut of 1 in a
+workpiece 5 high)."""
 TIP_HEIGHT = 4.0
 
 
