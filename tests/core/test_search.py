@@ -407,6 +407,10 @@ def test_allocate_warns_when_no_slave_is_near_the_master():
     masked = jnp.zeros(200, bool).at[0].set(True)
     with pytest.warns(UserWarning, match="no slave comes"):
         search.allocate(low.at[0].set(high[0]), floor, mask=masked)
+    # A batch's sizes are the largest of its scenes': it warns only when no scene is near.
+    with pytest.warns(UserWarning, match="no slave comes within the reach"):
+        search.allocate(jnp.stack([high, high + 1.0]), floor)
+    search.allocate(jnp.stack([high, low]), floor)
 
 
 def test_check_overflow_is_silent_until_a_state_overflows_then_raises_saying_what_to_do():
