@@ -40,6 +40,12 @@ REMOVED: dict[str, tuple[str, str | None, str]] = {
 }
 
 
+def message(old: str, replacement: str, removed_in: str) -> str:
+    """The one wording of a removal, for every package's table: the old name, the
+    version that removed it, and what to do instead."""
+    return f"{old} was removed in {removed_in}: {replacement}"
+
+
 def missing(module: str) -> Callable[[str], object]:
     """A module ``__getattr__`` for ``module``: an ``AttributeError`` for every
     name, naming the replacement of a removed one."""
@@ -49,6 +55,6 @@ def missing(module: str) -> Callable[[str], object]:
         if entry is None:
             raise AttributeError(f"module {module!r} has no attribute {name!r}")
         replacement, _, removed_in = entry
-        raise AttributeError(f"{module}.{name} was removed in {removed_in}: {replacement}")
+        raise AttributeError(message(f"{module}.{name}", replacement, removed_in))
 
     return __getattr__

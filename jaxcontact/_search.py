@@ -227,9 +227,8 @@ class Search:
             raise ValueError(f"skin must be finite and >= 0; got {self.skin}")
         removed = _removed.REMOVED.get(f'jaxcontact.Search(method="{self.method}")')
         if removed is not None:
-            raise ValueError(
-                f'Search(method="{self.method}") was removed in {removed[2]}: {removed[0]}'
-            )
+            old = f'Search(method="{self.method}")'
+            raise ValueError(_removed.message(old, removed[0], removed[2]))
         if self.method not in METHODS:
             raise ValueError(f"method must be one of {METHODS}; got {self.method!r}")
         if not (math.isfinite(self.slack) and self.slack >= 1):
@@ -305,9 +304,7 @@ class Search:
         if self.radius is None and x_prev is None:
             raise ValueError("allocate needs x_prev= for a Search without a radius (paths only)")
         hint = "allocate once outside, or start a state inside with search.init(sizes=...)"
-        pairs = _pairs.EVERY_PAIR if pairs is None else pairs
-        if not isinstance(pairs, Pairs):
-            raise ValueError(f"pairs must be a jaxcontact.Pairs; got {type(pairs).__name__}")
+        pairs = _pairs.given(pairs)
         given = (x, surface, x_prev, mask, pool, pairs)
         _inputs.require_concrete("Search.allocate", given, hint)
         batched = np.ndim(x) == 3

@@ -238,12 +238,18 @@ def pick(tags, index: Array):
     return jax.tree.map(lambda values: values[index], tags)
 
 
-def check(pairs, x, surface: Surface, mask) -> Pairs:
-    """``pairs`` (a ``Pairs``, or None for every pair) checked against the
-    slaves ``x`` (f[N, 2]), the master ``surface`` and the slave ``mask``."""
+def given(pairs) -> Pairs:
+    """``pairs`` as passed (a ``Pairs``, or None for every pair), its type checked."""
     pairs = EVERY_PAIR if pairs is None else pairs
     if not isinstance(pairs, Pairs):
         raise ValueError(f"pairs must be a jaxcontact.Pairs; got {type(pairs).__name__}")
+    return pairs
+
+
+def check(pairs, x, surface: Surface, mask) -> Pairs:
+    """``pairs`` (a ``Pairs``, or None for every pair) checked against the
+    slaves ``x`` (f[N, 2]), the master ``surface`` and the slave ``mask``."""
+    pairs = given(pairs)
     if not isinstance(pairs.self_contact, bool):
         raise ValueError(f"Pairs.self_contact must be a bool; got {pairs.self_contact!r}")
     if pairs.self_contact and pairs.slave_node is None:

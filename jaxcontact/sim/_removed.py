@@ -11,6 +11,8 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
+from jaxcontact._removed import message as _wording
+
 _PLOUGHING = "jaxcontact.problems.ploughing"
 REMOVED: dict[str, tuple[str, str, str]] = {
     # The problems and their demos and analyses, moved out of the parts.
@@ -71,8 +73,9 @@ REMOVED: dict[str, tuple[str, str, str]] = {
 
 
 def message(name: str, package: str = "jaxcontact.sim", table: Mapping = REMOVED) -> str:
+    """``jaxcontact._removed``'s wording for ``name`` of ``table`` (relative to ``package``)."""
     replacement, _, removed = table[name]
-    return f"{package}.{name} was removed in {removed}: use {replacement}"
+    return _wording(f"{package}.{name}", f"use {replacement}", removed)
 
 
 def __getattr__(name: str):
