@@ -320,7 +320,7 @@ def self_contact_part(num_nodes: int, sample: int, repeats: int, warmup: int, rn
         start = time.perf_counter()
         state = search.allocate(x, surface, pairs=pairs)
         allocated[label] = time.perf_counter() - start
-        sizes[label] = state.sizes
+        sizes[label] = state.sizes["closest"]
         return state
 
     names = {
@@ -552,15 +552,16 @@ def bodies_part(n: int, repeats: int, warmup: int, notes):
         )
         for name in calls
     ]
-    blocks = -(-count // union_state.sizes.block_size)
+    one, first, second = (state.sizes["closest"] for state in (union_state, *states))
+    blocks = -(-count // one.block_size)
     notes.append(
         f"{title}: one call / two searches = {timings[names[0]].median_s / base:.2f}x. "
-        f"Blocks of {union_state.sizes.block_size} rows kept: one call "
-        f"{union_state.sizes.block_capacity} of {blocks} (every node lies on its own outline, "
-        "so the broad phase keeps every block and the pair rule is left to the narrow phase), "
-        f"two searches {states[0].sizes.block_capacity} + {states[1].sizes.block_capacity}. "
-        f"Cells: one call {cells(union_state.sizes)}; two searches {cells(states[0].sizes)} "
-        f"and {cells(states[1].sizes)}: each search's grid spans only its kept slaves (a thin "
+        f"Blocks of {one.block_size} rows kept: one call {one.block_capacity} of {blocks} "
+        "(every node lies on its own outline, so the broad phase keeps every block and the "
+        "pair rule is left to the narrow phase), "
+        f"two searches {first.block_capacity} + {second.block_capacity}. "
+        f"Cells: one call {cells(one)}; two searches {cells(first)} "
+        f"and {cells(second)}: each search's grid spans only its kept slaves (a thin "
         "band along the contact), and the other body's segments outside it are clamped into "
         "the edge cells (`_cells.cell_of`), so the slaves near the corners search those cells."
     )

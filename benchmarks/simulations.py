@@ -345,7 +345,7 @@ def cutting_notes(runs) -> list[str]:
 def measure_ploughing(nodes: int, travel: float, repeats: int, slaves: str) -> dict:
     summary, drawn = run_demo(nodes, travel, repeats, np.float32, slaves)
     config, timed, untimed = drawn[2], drawn[5], drawn[6]
-    return ploughing_row(summary, config.sizes.num_slaves, timed, untimed, slaves)
+    return ploughing_row(summary, config.sizes["closest"].num_slaves, timed, untimed, slaves)
 
 
 def ploughing_row(summary, num_slaves: int, timed, untimed, slaves: str) -> dict:

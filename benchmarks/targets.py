@@ -222,7 +222,7 @@ def run_scene(kind: str, size: int, parameter, repeats: int, peers=None) -> dict
     x, surface, radius, pair = build(kind, size, parameter)
     calls, compile_s, shapes, skipped = {}, {}, {}, {}
     steps = search_steps(x, surface, radius, pair)
-    if narrow.tiled() and steps[WHOLE][1][0].sizes.use_cells:
+    if narrow.tiled() and steps[WHOLE][1][0].sizes["closest"].use_cells:
         steps[CHUNKED] = step(Search(radius=radius, skin=0.0), x, surface, pair)
     chosen = narrow.TILED
     for name, (jitted, args) in steps.items():
@@ -311,7 +311,7 @@ def stage_row(kind: str, size: int, parameter, repeats: int) -> dict | None:
     from benchmarks.harness import internals
 
     x, surface, radius, pair = build(kind, size, parameter)
-    sizes = Search(radius=radius).allocate(x, surface, **pair).sizes
+    sizes = Search(radius=radius).allocate(x, surface, **pair).sizes["closest"]
     if not sizes.use_cells:
         return None
     reach = jax.numpy.asarray(radius, x.dtype)

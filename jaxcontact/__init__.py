@@ -19,6 +19,7 @@ from jaxcontact._types import Contact as Contact
 from jaxcontact._types import ContactList as ContactList
 from jaxcontact._types import Crossing as Crossing
 from jaxcontact._types import CrossingList as CrossingList
+from jaxcontact._types import QuerySizes as QuerySizes
 from jaxcontact._types import Sizes as Sizes
 from jaxcontact._types import Surface as Surface
 from jaxcontact._validate import validate as validate
@@ -31,6 +32,7 @@ __all__ = [
     "Crossing",
     "CrossingList",
     "Pairs",
+    "QuerySizes",
     "Search",
     "SearchState",
     "Sizes",

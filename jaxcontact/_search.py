@@ -17,6 +17,7 @@ import functools
 import math
 import operator
 import warnings
+from collections.abc import Mapping
 
 import jax
 import jax.numpy as jnp
@@ -43,6 +44,7 @@ from jaxcontact._types import (
     ContactList,
     Crossing,
     CrossingList,
+    QuerySizes,
     Sizes,
     Surface,
 )
@@ -53,7 +55,7 @@ METHODS = ("auto", "binned", "unbinned", "exhaustive")
 @functools.partial(
     jax.tree_util.register_dataclass,
     data_fields=["candidates", "overflow", "rebuilds", "last_rebuild", "history", "slip"],
-    meta_fields=["sizes", "path_sizes", "reach"],
+    meta_fields=["sizes", "reach"],
 )
 @dataclasses.dataclass(frozen=True)
 class SearchState:
@@ -64,10 +66,10 @@ class SearchState:
     new shape would. Everything else is traced.
 
     Attributes:
-      sizes: the closest-point search's capacities (``None`` for the
-        exhaustive method or a search without a radius).
-      path_sizes: the swept search's capacities (``None`` unless allocated
-        with ``x_prev``).
+      sizes: the capacities of each query the state was allocated for, by
+        the query's name: ``state.sizes["closest"]`` (a search with a radius,
+        not the exhaustive method) and ``state.sizes["swept"]`` (allocated
+        with ``x_prev``). A read-only, hashable mapping (``QuerySizes``).
       candidates: what lies within ``radius + skin``, found at ``allocate``
         or since, with the positions it was found at (``None`` without a
         skin, or on empty inputs: then every step searches afresh).
@@ -88,8 +90,7 @@ class SearchState:
         before the first) for ``Search(track=True)``; ``None`` otherwise.
     """
 
-    sizes: Sizes | None
-    path_sizes: Sizes | None
+    sizes: QuerySizes
     candidates: _candidates.Candidates | None
     overflow: Array
     rebuilds: Array
@@ -303,121 +304,121 @@ class Search:
         """``allocate``, warning (``warn``) where no slave comes near the master."""
         if self.radius is None and x_prev is None:
             raise ValueError("allocate needs x_prev= for a Search without a radius (paths only)")
+        # Paths first: a bad x_prev is named before the x it shares its checks with.
+        queries = {SWEPT: (x_prev, x)} if x_prev is not None else {}
+        if self.radius is not None:
+            queries[CLOSEST] = (x,)
+        return self._allocate_queries(queries, surface, mask, at_least, pool, pairs, warn=warn)
+
+    def _allocate_queries(
+        self, queries, surface, mask=None, at_least=None, pool=None, pairs=None, *, warn=True
+    ) -> SearchState:
+        """The state for ``queries`` (``{Query: points}``, each points f[N, 2] or f[B, N, 2]):
+        one ``Sizes`` per query, by its name, and the candidates of the first query
+        with a radius. A batch runs the same code, mapped over its scenes."""
         hint = "allocate once outside, or start a state inside with search.init(sizes=...)"
         pairs = _pairs.given(pairs)
-        given = (x, surface, x_prev, mask, pool, pairs)
+        given = (list(queries.values()), surface, mask, pool, pairs)
         _inputs.require_concrete("Search.allocate", given, hint)
-        batched = np.ndim(x) == 3
-        if batched:
-            return self._allocate_batch(*given, at_least, warn)
-        x_prev, x, mask = _inputs.check_slaves(x, x_prev, mask)
-        surface = _inputs.check_surface(surface, x.dtype)
-        pool = _inputs.check_mask("pool", pool, surface.segments.shape[0])
-        pairing = self._pairing(x, surface, mask, pairs)
-        sizes = path_sizes = candidates = None
-        overflow = jnp.zeros((), bool)
+        batch = np.shape(next(iter(queries.values()))[-1])[:-2]
+        if batch:
+            given = _as_batch(*given, batch[0])
+            first = jax.tree.map(lambda values: values[0], given)
+            self._checked(queries, *first)
+            axes = 0
+        else:
+            given = self._checked(queries, *given)
+            axes = None
+        points, surface, mask, pool, pairing = given
+        queries = dict(zip(queries, points, strict=True))
+        sizes, candidates, overflow = {}, None, jnp.zeros(batch, bool)
         if self.method != "exhaustive":
             pooled = _segments.with_pool(surface, pool)
-            if self.radius is not None:
-                sizes = measure(x, pooled, radius=self._reach, mask=mask, **self._sizing)
-                sizes = self._fitted(sizes, at_least, "sizes", x, pooled, mask, radius=self._reach)
-                sizes = self._room(sizes, x, pooled, mask, at_least, pairing)
-                candidates, overflow = self._find(x, surface, mask, sizes, pool)
-            if x_prev is not None:
-                path_sizes = measure(x, pooled, x_prev=x_prev, mask=mask, **self._sizing)
-                path_sizes = self._fitted(
-                    path_sizes, at_least, "path_sizes", x, pooled, mask, x_prev=x_prev
-                )
-                path_sizes = self._path_room(path_sizes, x_prev, x, pooled, mask, at_least, pairing)
-        if warn and self.method != "exhaustive" and at_least is None:
-            reach = None if self.radius is None else self._reach
-            _warn_if_none_near(x, pooled, mask, reach, x_prev)
-        state = self._state(sizes, path_sizes, candidates, overflow, (), x)
+            for query, points in queries.items():
+                sized = self._sized(query, points, pooled, mask, at_least, pairing, axes)
+                sizes[query.name] = sized
+            near = [query for query in queries if query.uses_radius]
+            if near:
+                find = functools.partial(self._find, sizes=sizes[near[0].name])
+                if axes is not None:
+                    find = jax.vmap(find, in_axes=(0, 0, _axis(mask), _axis(pool)))
+                candidates, overflow = find(queries[near[0]][-1], surface, mask, pool)
+            if warn and at_least is None:
+                reach = self._reach if near else None
+                points = max(queries.values(), key=len)
+                x_prev = points[0] if len(points) > 1 else None
+                _warn_if_none_near(points[-1], pooled, mask, reach, x_prev)
+        x = next(iter(queries.values()))[-1]
+        state = self._state(QuerySizes(sizes), candidates, overflow, batch, x)
         return _kept_history(state, at_least)
+
+    def _checked(self, queries, points, surface, mask, pool, pairs):
+        """The inputs of one scene checked (``ValueError`` naming the argument), as
+        arrays: ``(points of each query, surface, mask, pool, pair rule)``."""
+        checked = []
+        for query, values in zip(queries, points, strict=True):
+            radius = self.radius if query.uses_radius else None
+            values, surface, _, mask = query.check(values, surface, radius, mask)
+            checked.append(values)
+        pool = _inputs.check_mask("pool", pool, surface.segments.shape[0])
+        return checked, surface, mask, pool, self._pairing(checked[0][-1], surface, mask, pairs)
 
     def _pairing(self, x, surface, mask, pairs: Pairs) -> Pairs:
         """The checked pair rule of one (unbatched) call."""
         return _pairs.check(pairs, x, surface, mask)
 
-    def _allocate_batch(self, x, surface, x_prev, mask, pool, pairs, at_least, warn) -> SearchState:
-        # A batch split over explicit mesh axes cannot be mapped over: whole.
-        given = (jnp.asarray(x), surface, x_prev, mask, pool, pairs.slave_node, pairs.slave_body)
-        x, surface, x_prev, mask, pool, slave_node, slave_body = replicated(given)
-        if x.shape[-1] != 2:
-            raise ValueError(f"x must have shape (N, 2) or (B, N, 2); got shape {x.shape}")
-        batch = x.shape[0]
-        mask, slave_node, slave_body = (
-            _batched(name, values, 1, batch)
-            for name, values in (
-                ("mask", mask),
-                ("slave_node", slave_node),
-                ("slave_body", slave_body),
-            )
+    def _sized(self, query, points, surface, mask, at_least, pairing, axes) -> Sizes:
+        """The sizes of ``query`` for this configuration (the largest over a batch:
+        ``axes`` 0), with the list form's capacity where the search is compact, and at
+        least ``at_least``'s."""
+        query_sizing = query.sizing(points, None if self.radius is None else self._reach)
+        measuring = measure if axes is None else measure_batch
+        sizes = measuring(points[-1], surface, mask=mask, **query_sizing, **self._sizing)
+        sizes = self._fitted(sizes, at_least, query.name, points[-1], surface, mask, query_sizing)
+        sizes = dataclasses.replace(sizes, contact_capacity=0)
+        if not self.compact:
+            return sizes
+        radius = jnp.asarray(self.radius, points[-1].dtype) if query.uses_radius else None
+        in_axes = None if axes is None else ((0,) * len(points), 0, _axis(mask), 0)
+        needed = driver.entries_needed(
+            query, points, surface, radius, mask, sizes, pairing, in_axes
         )
-        surface = _batched_surface(surface, batch)
-        pool = _batched("pool", pool, 1, batch)
-        pairing = Pairs(slave_node, slave_body, pairs.self_contact, pairs.allow)
-        first = jax.tree.map(lambda values: values[0], (x, surface, mask, pairing))
-        self._pairing(*first)
-        axes = (0, 0, None if mask is None else 0, jax.tree.map(lambda _: 0, pairing))
-        sizes = path_sizes = candidates = None
-        overflow = jnp.zeros(x.shape[:1], bool)
-        if self.method != "exhaustive":
-            pooled = _segments.with_pool(surface, pool)
-            if self.radius is not None:
-                sizes = measure_batch(x, pooled, radius=self._reach, mask=mask, **self._sizing)
-                sizes = self._fitted(sizes, at_least, "sizes", x, pooled, mask, radius=self._reach)
-                sizes = self._room(sizes, x, pooled, mask, at_least, pairing, axes)
-
-                def find(x, surface, mask, pool):
-                    return self._find(x, surface, mask, sizes, pool)
-
-                find_axes = (0, 0, axes[2], None if pool is None else 0)
-                candidates, overflow = jax.vmap(find, in_axes=find_axes)(x, surface, mask, pool)
-            if x_prev is not None:
-                path_sizes = measure_batch(x, pooled, x_prev=x_prev, mask=mask, **self._sizing)
-                path_sizes = self._fitted(
-                    path_sizes, at_least, "path_sizes", x, pooled, mask, x_prev=x_prev
-                )
-                path_sizes = self._path_room(
-                    path_sizes, x_prev, x, pooled, mask, at_least, pairing, axes
-                )
-        if warn and self.method != "exhaustive" and at_least is None:
-            reach = None if self.radius is None else self._reach
-            _warn_if_none_near(x, pooled, mask, reach, x_prev)
-        state = self._state(sizes, path_sizes, candidates, overflow, x.shape[:1], x)
-        return _kept_history(state, at_least)
+        measured = _sizes.with_entries(sizes, needed, self.slack)
+        return self._merged(measured, at_least, query.name)
 
     def init(
         self,
         x: Array,
         surface: Surface,
         *,
-        sizes: Sizes | None,
-        path_sizes: Sizes | None = None,
+        sizes: QuerySizes | None,
         mask: Array | None = None,
         pool: Array | None = None,
     ) -> SearchState:
         """A fresh state with known sizes (from an earlier ``allocate``), under ``jit`` too.
 
         For a run that starts inside a compiled program: its sizes are static
-        (``state.sizes``, hashable), the candidates are found here (with the
-        masked segments of ``pool`` listed, as ``allocate`` lists them).
+        (``state.sizes``, hashable; ``None`` for the exhaustive method), the
+        candidates are found here (with the masked segments of ``pool``
+        listed, as ``allocate`` lists them).
         """
         _, x, mask = _inputs.check_slaves(x, None, mask)
         surface = _inputs.check_surface(surface, x.dtype)
         pool = _inputs.check_mask("pool", pool, surface.segments.shape[0])
+        sizes = QuerySizes(sizes)
         candidates, overflow = None, jnp.zeros((), bool)
-        if sizes is not None and self.radius is None:
+        closest = sizes.get(CLOSEST.name)
+        if closest is not None and self.radius is None:
             raise ValueError(
-                "init with sizes= needs a Search with a radius; this one searches paths"
+                "init with closest sizes needs a Search with a radius; this one searches paths"
             )
-        if sizes is not None:
-            _sizes.check_sizes(sizes, x.shape[0], for_paths=False)
-            candidates, overflow = self._find(x, surface, mask, sizes, pool)
-        return self._state(sizes, path_sizes, candidates, overflow, (), x)
+        for name, given in sizes.items():
+            _sizes.check_sizes(given, x.shape[0], for_paths=name == SWEPT.name)
+        if closest is not None:
+            candidates, overflow = self._find(x, surface, mask, pool, sizes=closest)
+        return self._state(sizes, candidates, overflow, (), x)
 
-    def _state(self, sizes, path_sizes, candidates, overflow, batch, x) -> SearchState:
+    def _state(self, sizes, candidates, overflow, batch, x) -> SearchState:
         history = slip = None
         if self.track:
             history = _track.empty_history(x.shape[-2], x.dtype, batch)
@@ -426,7 +427,6 @@ class Search:
             history=history,
             slip=slip,
             sizes=sizes,
-            path_sizes=path_sizes,
             candidates=candidates,
             overflow=overflow,
             rebuilds=jnp.zeros(batch, jnp.int32),
@@ -434,7 +434,7 @@ class Search:
             reach=None if self.radius is None else self._reach,
         )
 
-    def _find(self, x, surface, mask, sizes: Sizes, pool=None):
+    def _find(self, x, surface, mask, pool, *, sizes: Sizes):
         """``(candidates or None, overflow)``: none are kept without a skin."""
         empty = x.shape[0] == 0 or surface.segments.shape[0] == 0
         if self.skin == 0 or empty:
@@ -442,30 +442,6 @@ class Search:
         reach = jnp.asarray(self._reach, x.dtype)
         candidates = _candidates.find_jit(x, surface, reach, mask, sizes=sizes, pool=pool)
         return candidates, candidates.overflow
-
-    def _room(self, sizes: Sizes, x, surface, mask, at_least, pairing, axes=None) -> Sizes:
-        """``sizes`` with the compact form's capacity measured (the largest over
-        a batch, mapped over ``axes``), and at least ``at_least``'s; none
-        (the N-row form) for a search that is not compact."""
-        if not self.compact:
-            return dataclasses.replace(sizes, contact_capacity=0)
-        radius = jnp.asarray(self.radius, x.dtype)
-        axes = None if axes is None else ((axes[0],), *axes[1:])
-        needed = driver.entries_needed(CLOSEST, (x,), surface, radius, mask, sizes, pairing, axes)
-        measured = _sizes.with_entries(sizes, needed, self.slack)
-        return self._merged(measured, at_least, "sizes")
-
-    def _path_room(self, sizes: Sizes, x_prev, x, surface, mask, at_least, pairing, axes=None):
-        """Path ``sizes`` with the compact swept form's capacity (as ``_room``)."""
-        sizes = dataclasses.replace(sizes, contact_capacity=0)
-        if not self.compact:
-            return sizes
-        axes = None if axes is None else ((axes[0], axes[0]), *axes[1:])
-        needed = driver.entries_needed(
-            SWEPT, (x_prev, x), surface, None, mask, sizes, pairing, axes
-        )
-        measured = _sizes.with_entries(sizes, needed, self.slack)
-        return self._merged(measured, at_least, "path_sizes")
 
     @property
     def _reach(self) -> float:
@@ -482,27 +458,26 @@ class Search:
             "chunk_rows": self.chunk_rows,
         }
 
-    def _fitted(self, sizes: Sizes, at_least, field: str, x, surface, mask, **query) -> Sizes:
+    def _fitted(self, sizes: Sizes, at_least, name: str, x, surface, mask, query_sizing) -> Sizes:
         """``sizes`` merged with ``at_least``'s, and where the merge changed
         them, with room at the merged cells for this configuration
-        (``_sizes.fitted``; ``query``: ``radius=`` or ``x_prev=``, as
+        (``_sizes.fitted``; ``query_sizing``: ``radius=`` or ``x_prev=``, as
         ``measure``): a capacity holds only at the cells it was measured at."""
-        merged = self._merged(sizes, at_least, field)
+        merged = self._merged(sizes, at_least, name)
         if merged == sizes:
             return merged
-        return fitted(merged, x, surface, mask=mask, **query, **self._sizing)
+        return fitted(merged, x, surface, mask=mask, **query_sizing, **self._sizing)
 
     @staticmethod
-    def _merged(sizes: Sizes, at_least, field: str) -> Sizes:
-        if isinstance(at_least, Sizes):
-            old = at_least if at_least.for_paths == sizes.for_paths else None
-        elif at_least is None or isinstance(at_least, SearchState):
-            old = None if at_least is None else getattr(at_least, field)
-        else:
+    def _merged(sizes: Sizes, at_least, name: str) -> Sizes:
+        if isinstance(at_least, SearchState):
+            at_least = at_least.sizes
+        if at_least is not None and not isinstance(at_least, Mapping):
             raise ValueError(
-                f"at_least must be a SearchState or Sizes; got {type(at_least).__name__}"
+                "at_least must be a SearchState or its sizes (state.sizes); got "
+                f"{type(at_least).__name__}"
             )
-        return _sizes.merged(sizes, old)
+        return _sizes.merged(sizes, None if at_least is None else QuerySizes(at_least).get(name))
 
     # -- traced -------------------------------------------------------------
 
@@ -557,24 +532,25 @@ class Search:
         if self.method == "exhaustive":
             contact = driver.exhaustive(CLOSEST, (x,), surface, radius, mask, pairing)
             return self._finish(contact, state, x, surface)
-        if state.sizes is None:
-            raise ValueError(
-                "state has no closest-point sizes: make it with this search's allocate"
-            )
-        _sizes.check_sizes(state.sizes, x.shape[0], for_paths=False)
-        self._check_form(state.sizes)
+        self._sizes_of(CLOSEST, state, x)
         self._check_state(state, x, surface)
         contact, state = _closest(self, state, x, surface, mask, radius, pairing)
         return self._finish(contact, state, x, surface)
 
-    def _check_form(self, sizes: Sizes):
-        """A ``ValueError`` when ``sizes`` were made for the other form (compact or N rows)."""
+    def _sizes_of(self, query, state: SearchState, x) -> Sizes:
+        """The state's sizes for ``query``, checked against ``x`` and this search's form."""
+        sizes = state.sizes.get(query.name)
+        if sizes is None:
+            how = "with this search (it has a radius)" if query.uses_radius else "with x_prev="
+            raise ValueError(f"state has no {query.name} sizes: allocate it {how}")
+        _sizes.check_sizes(sizes, x.shape[0], for_paths=not query.uses_radius)
         if bool(sizes.contact_capacity) != self.compact:
             made, wanted = (("compact", "N-row"), ("N-row", "compact"))[self.compact]
             raise ValueError(
                 f"state was allocated by a {made} search; this one is {wanted}: "
                 "allocate with this search"
             )
+        return sizes
 
     def _finish(self, contact, state: SearchState, x, surface: Surface):
         """Smooth normals and the slip history, where this search asks for them."""
@@ -634,14 +610,15 @@ class Search:
         pairing = self._pairing(points[-1], surface, mask, pairs)
         if self.method == "exhaustive":
             return driver.exhaustive(SWEPT, points, surface, None, mask, pairing), state
-        if state.path_sizes is None:
-            raise ValueError("state has no path sizes: allocate it with x_prev=")
-        _check_unbatched(state, "swept")
-        sizes = state.path_sizes
-        _sizes.check_sizes(sizes, points[-1].shape[0], for_paths=True)
-        self._check_form(sizes)
-        crossing = driver.sized_jit(SWEPT, points, surface, None, mask, sizes=sizes, pairs=pairing)
-        return crossing, dataclasses.replace(state, overflow=state.overflow | crossing.overflow)
+        return self._step(SWEPT, state, points, surface, None, mask, pairing)
+
+    def _step(self, query, state: SearchState, points, surface, radius, mask, pairing):
+        """``query`` searched at the state's sizes: ``(result, state)`` (any query;
+        ``closest`` adds the candidates' reuse, the radius bound and the slip)."""
+        _check_unbatched(state, query.name)
+        sizes = self._sizes_of(query, state, points[-1])
+        result = driver.sized_jit(query, points, surface, radius, mask, sizes=sizes, pairs=pairing)
+        return result, dataclasses.replace(state, overflow=state.overflow | result.overflow)
 
 
 def _batched(name: str, values, scene_ndim: int, batch: int):
@@ -670,6 +647,38 @@ def _batched_surface(surface: Surface, batch: int) -> Surface:
         _batched("surface.mask", surface.mask, 1, batch),
         _batched("surface.body", surface.body, 1, batch),
     )
+
+
+def _as_batch(points, surface, mask, pool, pairs: Pairs, batch: int):
+    """A batch's inputs, each with a leading axis of ``batch`` scenes (a surface,
+    mask, pool or pair rule given once is shared by every scene)."""
+    # A batch split over explicit mesh axes cannot be mapped over: whole.
+    given = (points, surface, mask, pool, pairs.slave_node, pairs.slave_body)
+    points, surface, mask, pool, slave_node, slave_body = replicated(given)
+    points = [tuple(map(jnp.asarray, values)) for values in points]
+    for values in points:
+        for value in values:
+            if value.ndim != 3 or value.shape[0] != batch or value.shape[-1] != 2:
+                raise ValueError(
+                    f"x must have shape (N, 2) or (B, N, 2), as every slave array of a batch; "
+                    f"got shape {value.shape}"
+                )
+    slave_node, slave_body, mask, pool = (
+        _batched(name, values, 1, batch)
+        for name, values in (
+            ("slave_node", slave_node),
+            ("slave_body", slave_body),
+            ("mask", mask),
+            ("pool", pool),
+        )
+    )
+    pairing = Pairs(slave_node, slave_body, pairs.self_contact, pairs.allow)
+    return points, _batched_surface(surface, batch), mask, pool, pairing
+
+
+def _axis(values):
+    """``vmap``'s axis of an optional batched input."""
+    return None if values is None else 0
 
 
 def _kept_history(state: SearchState, at_least) -> SearchState:
@@ -774,7 +783,7 @@ def _check_unbatched(state: SearchState, method: str):
 @functools.partial(jax.jit, static_argnums=0)
 @searched_whole(rows="x")
 def _closest(search: Search, state: SearchState, x, surface, mask, radius, pairing):
-    sizes = state.sizes
+    sizes = state.sizes[CLOSEST.name]
     reach = jnp.asarray(search._reach, x.dtype)
     # A radius past the bound the sizes were built for may miss a contact.
     real = _segments.rows_ok(x, mask)

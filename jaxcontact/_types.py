@@ -9,6 +9,7 @@ and ``M`` for master segments; ``f`` is the input's float dtype.
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Iterator, Mapping
 from typing import NamedTuple
 
 import jax
@@ -216,3 +217,50 @@ class Sizes:
     def slave_capacity(self) -> int:
         """Slaves the narrow phase holds: ``block_capacity * block_size``."""
         return self.block_capacity * self.block_size
+
+
+class QuerySizes(Mapping):
+    """The ``Sizes`` of each query a ``Search`` was allocated for, by the query's
+    name (``"closest"``, ``"swept"``): ``state.sizes``.
+
+    Read-only and hashable, as a static field of ``SearchState`` must be; a
+    ``dict`` of the same items converts (``QuerySizes(mapping)``), so
+    ``search.init(x, surface, sizes={"closest": sizes})`` works as well as
+    ``sizes=state.sizes``.
+    """
+
+    __slots__ = ("_items",)
+
+    def __init__(self, sizes: Mapping[str, Sizes] | None = None):
+        items = dict(sizes or {})
+        for name, value in items.items():
+            if not isinstance(name, str) or not isinstance(value, Sizes):
+                raise ValueError(
+                    "sizes must map a query's name to its Sizes (state.sizes); got "
+                    f"{type(name).__name__} -> {type(value).__name__}"
+                )
+        object.__setattr__(self, "_items", tuple(sorted(items.items())))
+
+    def __setattr__(self, name, value):
+        raise AttributeError("QuerySizes is read-only")
+
+    def __getitem__(self, name: str) -> Sizes:
+        for key, value in self._items:
+            if key == name:
+                return value
+        raise KeyError(name)
+
+    def __iter__(self) -> Iterator[str]:
+        return (key for key, _ in self._items)
+
+    def __len__(self) -> int:
+        return len(self._items)
+
+    def __eq__(self, other) -> bool:
+        return isinstance(other, Mapping) and dict(self._items) == dict(other.items())
+
+    def __hash__(self) -> int:
+        return hash(self._items)
+
+    def __repr__(self) -> str:
+        return f"QuerySizes({dict(self._items)!r})"

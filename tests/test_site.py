@@ -102,4 +102,4 @@ def test_the_public_names_are_found():
     assert not {"contact_forces"} & set(public_names("jaxcontact.forces"))
     # Every name of __all__ but the two public modules, documented by their own pages.
     assert set(names) == set(jaxcontact.__all__) - {"forces", "scenes"}
-    assert len(names) == 19
+    assert len(names) == 20

@@ -12,7 +12,8 @@ names them:
    better, ``inf`` for none (a squared distance; a time of first hit);
 2. the **reach**: how far from a segment a slave may be and still meet it
    (the box each slave culls with, the margin the segments are binned with,
-   and the unit of the self-contact window);
+   the unit of the self-contact window, and how ``Search.allocate``
+   measures the query's sizes);
 3. how a row **chooses** among its pairs: the lowest score, exact ties to
    the lower index, then the query's own tie rule in ``assemble``;
 4. how the choice becomes **result rows** (``assemble``), and which kept
@@ -51,11 +52,17 @@ class Query(abc.ABC):
     flag: ClassVar[str]  # the result's field that says a row holds an answer
     num_points: ClassVar[int]  # arrays of f[N, 2] per slave: 1 (a point) or 2 (a path)
     row_multiple: ClassVar[int] = 1  # the exhaustive search pads its rows to a multiple
+    uses_radius: ClassVar[bool]  # scored within a radius (its sizes reach radius + skin)
 
     @abc.abstractmethod
     def check(self, points: tuple, surface, radius, mask):
         """``(points, surface, radius, mask)`` checked, as arrays (``ValueError`` naming
         the argument otherwise)."""
+
+    @abc.abstractmethod
+    def sizing(self, points: tuple, reach) -> dict:
+        """``sizes.measure``'s keywords for this query beside ``x = points[-1]``:
+        ``radius=reach`` (``radius + skin``) or ``x_prev=`` (a path's own box)."""
 
     @abc.abstractmethod
     def kernel(self, *row_and_edge) -> Array:

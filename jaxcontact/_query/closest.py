@@ -177,11 +177,15 @@ class Closest(Query):
     listing = ContactList
     flag = "found"
     num_points = 1
+    uses_radius = True
 
     def check(self, points, surface, radius, mask):
         (x,) = points
         x, surface, radius, mask = inputs.check_contact_inputs(x, surface, radius, mask)
         return (x,), surface, radius, mask
+
+    def sizing(self, points, reach):
+        return {"radius": reach}
 
     def kernel(self, x, edge):
         return squared_distance(x, edge)

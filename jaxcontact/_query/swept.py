@@ -59,6 +59,7 @@ class Swept(Query):
     listing = CrossingList
     flag = "crossed"
     num_points = 2
+    uses_radius = False
     # The exhaustive swept search's rows come in whole vectors: with XLA's
     # CPU fusion emitters it ran 3x slower on 81,937 or 81,939 rows than
     # padded to 81,944 (measured with tag benchmarks-archive-1.2:benchmarks/archive/row_counts.py).
@@ -68,6 +69,9 @@ class Swept(Query):
         x_prev, x = points
         x_prev, x, mask = inputs.check_path_inputs(x_prev, x, mask)
         return (x_prev, x), inputs.check_surface(surface, x.dtype), None, mask
+
+    def sizing(self, points, reach):
+        return {"x_prev": points[0]}
 
     def kernel(self, x_prev, x, edge):
         return first_hit_time(x_prev, x, edge)

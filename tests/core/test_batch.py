@@ -47,12 +47,12 @@ def test_one_allocation_for_a_batch_of_contacts_equals_a_loop(method):
     search = Search(radius=RADIUS, method=method)
     state = search.allocate(x, surface, mask=mask)
     cells = method == "binned"
-    assert state.sizes.use_cells == cells
+    assert state.sizes["closest"].use_cells == cells
     assert state.overflow.shape == state.rebuilds.shape == (len(scenes),)
     # The batch's sizes are at least as large as any scene's own.
     for i, scene in enumerate(scenes):
         own = measure(scene.x, scene.surface, radius=RADIUS, mask=mask[i], use_cells=cells)
-        assert state.sizes.block_capacity >= own.block_capacity
+        assert state.sizes["closest"].block_capacity >= own.block_capacity
     detect = jax.jit(jax.vmap(lambda st, x, s, m: search.closest(st, x, s, mask=m)))
     batched, state = detect(state, x, surface, mask)
     assert not bool(jnp.any(batched.overflow)) and not bool(jnp.any(state.overflow))
@@ -65,7 +65,7 @@ def test_one_allocation_for_a_batch_of_paths_equals_a_loop():
     scenes, x_prev, x, surface, mask = _batch()
     search = Search()  # paths only
     state = search.allocate(x, surface, x_prev=x_prev, mask=mask)
-    assert state.sizes is None and state.path_sizes.for_paths
+    assert list(state.sizes) == ["swept"] and state.sizes["swept"].for_paths
     detect = jax.jit(jax.vmap(lambda st, p, x, s, m: search.swept(st, p, x, s, mask=m)))
     batched, state = detect(state, x_prev, x, surface, mask)
     assert not bool(jnp.any(state.overflow))
@@ -93,11 +93,11 @@ def test_a_batch_allocation_grows_sizes_that_another_scene_outgrows():
     lone = measure(scenes[2].x, scenes[2].surface, radius=RADIUS, use_cells=False)
     assert lone.block_capacity == 1
     detect = jax.jit(jax.vmap(search.closest))
-    starved = jax.vmap(lambda x, s: search.init(x, s, sizes=lone))(x, surface)
+    starved = jax.vmap(lambda x, s: search.init(x, s, sizes={"closest": lone}))(x, surface)
     too_small, starved = detect(starved, x, surface)
     assert bool(too_small.overflow[0]) and bool(starved.overflow[0])
     state = search.allocate(x, surface)
-    assert state.sizes.block_capacity > lone.block_capacity
+    assert state.sizes["closest"].block_capacity > lone.block_capacity
     contact, state = detect(state, x, surface)
     assert not bool(jnp.any(contact.overflow)) and not bool(jnp.any(state.overflow))
 
@@ -152,7 +152,7 @@ def test_a_batch_with_nothing_near_in_one_scene_still_bins_many_segments_in_cell
     far = scene.x.at[:, 1].add(100.0)
     assert measure(far, scene.surface, radius=scene.radius).use_cells
     state = Search(radius=scene.radius).allocate(jnp.stack([far, scene.x]), scene.surface)
-    assert state.sizes.use_cells
+    assert state.sizes["closest"].use_cells
 
 
 @pytest.mark.x64  # equal to 1e-10: float64
@@ -171,7 +171,7 @@ def test_gradients_through_a_vmapped_detector_equal_a_loop(detector):
     if detector == "search":
         search = Search(radius=radius)
         state = search.allocate(x, surface)
-        assert state.sizes.use_cells
+        assert state.sizes["closest"].use_cells
 
         def detect(state, x, s):
             return search.closest(state, x, s)[0]

@@ -20,6 +20,7 @@ from hypothesis import strategies as st
 
 from jaxcontact import (
     Pairs,
+    QuerySizes,
     Search,
     Sizes,
     Surface,
@@ -181,7 +182,8 @@ def test_too_small_span_sets_overflow():
 
 def test_sizes_and_search_are_hashable_and_reused_without_retracing():
     scene, search, state = allocated("cutting")
-    assert hash(state.sizes) == hash(dataclasses.replace(state.sizes))
+    sizes = state.sizes["closest"]
+    assert hash(state.sizes) == hash(QuerySizes({"closest": dataclasses.replace(sizes)}))
     assert hash(search) == hash(dataclasses.replace(search))
     search_step(search, state, scene.x, scene.surface)  # traced here, or already
     traced = len(TRACES)
@@ -214,10 +216,10 @@ def test_wrong_sizes_raise():
     scene, search, state = allocated("cutting")
     with pytest.raises(ValueError, match=f"made for {scene.x.shape[0]} slaves; x has 400 rows"):
         search.closest(state, scene.x[:400], scene.surface)
-    with pytest.raises(ValueError, match="no path sizes"):
+    with pytest.raises(ValueError, match="no swept sizes: allocate it with x_prev="):
         search.swept(state, scene.x_prev, scene.x, scene.surface)
     with pytest.raises(ValueError, match="other query"):
-        sized_bucket_swept(scene.x_prev, scene.x, scene.surface, sizes=state.sizes)
+        sized_bucket_swept(scene.x_prev, scene.x, scene.surface, sizes=state.sizes["closest"])
     with pytest.raises(ValueError, match="radius"):
         measure(scene.x, scene.surface)
     with pytest.raises(ValueError, match="x_prev"):
@@ -369,9 +371,9 @@ def test_sizes_merged_from_other_cells_get_room_at_their_own():
     merged = largest(measure(x, surface, radius=radius), old)
     assert bool(sized_bucket_sort(x, surface, radius=radius, sizes=merged).overflow)
     search = Search(radius=radius, method="binned")
-    state = search.allocate(x, surface, at_least=old)
-    assert state.sizes.cell_size == merged.cell_size
-    assert state.sizes.cell_capacity > merged.cell_capacity
+    state = search.allocate(x, surface, at_least={"closest": old})
+    assert state.sizes["closest"].cell_size == merged.cell_size
+    assert state.sizes["closest"].cell_capacity > merged.cell_capacity
     contact, state = search.closest(state, x, surface)
     assert not bool(state.overflow)
     assert_same_contact(contact, all_to_all(x, surface, radius=radius), radius)
@@ -412,7 +414,7 @@ def test_expired_candidates_can_miss_contacts_which_is_why_the_check_exists():
     moved = scene.surface._replace(nodes=scene.surface.nodes.at[:, 0].add(-1.5))
     assert bool(jit_expired(state.candidates, scene.x, moved, None, search.skin))
     stale = sized_bucket_sort(
-        scene.x, moved, radius=0.1, sizes=state.sizes, candidates=state.candidates
+        scene.x, moved, radius=0.1, sizes=state.sizes["closest"], candidates=state.candidates
     )
     fresh = all_to_all(scene.x, moved, radius=0.1)
     assert int(fresh.found.sum()) > int(stale.found.sum())
@@ -432,7 +434,7 @@ def test_bucket_swept_ignores_a_nan_previous_position_like_swept():
 
 def test_reused_candidates_skip_a_segment_masked_since():
     scene, search, state = allocated("rough_die")
-    assert state.sizes.use_cells and state.candidates is not None
+    assert state.sizes["closest"].use_cells and state.candidates is not None
     masked = scene.surface._replace(mask=jnp.arange(400) % 3 != 0)
     reused, state = search.closest(state, scene.x, masked)
     assert int(state.rebuilds) == 0  # masking a segment keeps the candidates
@@ -494,7 +496,7 @@ def test_kept_slaves_searched_in_chunks_longest_lists_first_equal_dense(detector
         # Candidates found at allocate (with a skin) and reused: nothing has moved.
         search = Search(radius=scene.radius, skin=scene.radius / 2, chunk_rows=64)
         state = search.allocate(x, scene.surface, mask=mask)
-        sizes = state.sizes
+        sizes = state.sizes["closest"]
         got, state = search.closest(state, x, scene.surface, mask=mask)
         assert state.candidates is not None and int(state.rebuilds) == 0
     else:

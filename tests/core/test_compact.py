@@ -17,6 +17,7 @@ import pytest
 from jaxcontact import (
     ContactList,
     CrossingList,
+    QuerySizes,
     Search,
     Surface,
     all_to_all,
@@ -92,7 +93,8 @@ def test_one_call_compact_packs_the_dense_rows(scene_name):
     assert_packs(entries, dense, num_rows)
     # The capacity is Search(compact=True)'s: the contacts found times the
     # slack, not one entry per slave the cull kept.
-    sizes = Search(radius=scene.radius, compact=True).allocate(x, scene.surface, mask=mask).sizes
+    state = Search(radius=scene.radius, compact=True).allocate(x, scene.surface, mask=mask)
+    sizes = state.sizes["closest"]
     assert entries.node.shape == (sizes.contact_capacity,)
     assert int(dense.found.sum()) <= sizes.contact_capacity < sizes.slave_capacity
 
@@ -103,8 +105,8 @@ def test_search_compact_in_a_scan_equals_all_to_all_at_every_step():
     last = search.allocate(xs[-1], surface_at(nodes[-1], segments))
     state = search.allocate(xs[0], surface_at(nodes[0], segments), at_least=last)
     # The capacity is measured from the contacts found, not the slaves kept.
-    capacity = state.sizes.contact_capacity
-    assert 0 < capacity < state.sizes.slave_capacity
+    capacity = state.sizes["closest"].contact_capacity
+    assert 0 < capacity < state.sizes["closest"].slave_capacity
 
     def body(state, step):
         x, at = step
@@ -129,8 +131,8 @@ def test_too_few_entries_overflow_and_keep_the_first_contacts():
     search = Search(radius=scene.radius, compact=True)
     state = search.allocate(scene.x, scene.surface)
     dense = all_to_all(scene.x, scene.surface, radius=scene.radius)
-    assert state.sizes.contact_capacity >= int(dense.found.sum()) > 3
-    small = dataclasses.replace(state.sizes, contact_capacity=3)
+    assert state.sizes["closest"].contact_capacity >= int(dense.found.sum()) > 3
+    small = dataclasses.replace(state.sizes["closest"], contact_capacity=3)
     radius = jnp.asarray(scene.radius, scene.x.dtype)
     entries = driver.sized_jit(CLOSEST, (scene.x,), scene.surface, radius, None, sizes=small)
     assert bool(entries.overflow)
@@ -138,7 +140,8 @@ def test_too_few_entries_overflow_and_keep_the_first_contacts():
     np.testing.assert_array_equal(entries.node, rows)
     np.testing.assert_array_equal(entries.segment, dense.segment[rows])
     # The step carries the flag in the state, as for every other capacity.
-    entries, state = search.closest(dataclasses.replace(state, sizes=small), scene.x, scene.surface)
+    starved = dataclasses.replace(state, sizes=QuerySizes({"closest": small}))
+    entries, state = search.closest(starved, scene.x, scene.surface)
     assert bool(entries.overflow) and bool(state.overflow)
 
 
@@ -228,8 +231,8 @@ def test_a_batch_is_allocated_once_and_searched_under_vmap():
     entries, state = jax.jit(jax.vmap(search.closest))(state, xs, surfaces)
     dense = jax.vmap(lambda x, s: all_to_all(x, s, radius=RADIUS))(xs, surfaces)
     counts = np.asarray(dense.found.sum(axis=1))
-    assert entries.node.shape == (3, state.sizes.contact_capacity) and counts.min() > 0
-    assert state.sizes.contact_capacity >= counts.max()
+    assert entries.node.shape == (3, state.sizes["closest"].contact_capacity) and counts.min() > 0
+    assert state.sizes["closest"].contact_capacity >= counts.max()
     assert not bool(jnp.any(state.overflow))
     for b in range(3):
         got = jax.tree.map(lambda field, b=b: field[b], entries).to_contact(xs.shape[1])
@@ -268,7 +271,7 @@ def test_one_call_compact_swept_packs_the_crossed_rows():
     assert_packs_crossings(entries, dense, x.shape[0])
     # The capacity is Search(compact=True)'s: the paths crossing times the slack.
     paths = Search(compact=True).allocate(x, scene.surface, x_prev=scene.x_prev, mask=mask)
-    sizes = paths.path_sizes
+    sizes = paths.sizes["swept"]
     assert entries.node.shape == (sizes.contact_capacity,)
     assert int(dense.crossed.sum()) <= sizes.contact_capacity < sizes.slave_capacity
 
@@ -280,8 +283,8 @@ def test_search_compact_swept_measures_its_capacity_and_overflows_when_outgrown(
     dense = swept(scene.x_prev, x, scene.surface, mask=mask)
     count = int(dense.crossed.sum())
     # The capacity is measured from the paths that cross, not the paths kept.
-    capacity = state.path_sizes.contact_capacity
-    assert count <= capacity < state.path_sizes.slave_capacity
+    capacity = state.sizes["swept"].contact_capacity
+    assert count <= capacity < state.sizes["swept"].slave_capacity
     step = jax.jit(lambda state, x: search.swept(state, scene.x_prev, x, scene.surface, mask=mask))
     entries, after = step(state, x)
     assert not bool(entries.overflow) and not bool(after.overflow)
@@ -290,9 +293,13 @@ def test_search_compact_swept_measures_its_capacity_and_overflows_when_outgrown(
     binned = bucket_swept(scene.x_prev, x, scene.surface, mask=mask)  # the same search, dense
     assert_packs_crossings(entries, binned, x.shape[0])
     # Too few entries: the first crossings are kept, and the state says so.
-    small = dataclasses.replace(state.path_sizes, contact_capacity=3)
+    small = dataclasses.replace(state.sizes["swept"], contact_capacity=3)
     entries, after = search.swept(
-        dataclasses.replace(state, path_sizes=small), scene.x_prev, x, scene.surface, mask=mask
+        dataclasses.replace(state, sizes=QuerySizes({"swept": small})),
+        scene.x_prev,
+        x,
+        scene.surface,
+        mask=mask,
     )
     assert bool(entries.overflow) and bool(after.overflow)
     rows = np.flatnonzero(np.asarray(dense.crossed))[:3]
@@ -305,9 +312,9 @@ def test_search_compact_swept_measures_its_capacity_and_overflows_when_outgrown(
     with pytest.raises(ValueError, match="allocated by a N-row search; this one is compact"):
         search.swept(dense_state, scene.x_prev, x, scene.surface)
     grown = search.allocate(x, scene.surface, x_prev=scene.x_prev, mask=mask, at_least=dense_state)
-    assert grown.path_sizes.contact_capacity == capacity
+    assert grown.sizes["swept"].contact_capacity == capacity
     back = dense_search.allocate(x, scene.surface, x_prev=scene.x_prev, mask=mask, at_least=state)
-    assert back.path_sizes.contact_capacity == 0 == back.sizes.contact_capacity
+    assert back.sizes["swept"].contact_capacity == 0 == back.sizes["closest"].contact_capacity
     # No segments: padding entries only.
     empty = Surface(scene.surface.nodes, np.zeros((0, 2), np.int32))
     nothing = bucket_swept(scene.x_prev, x, empty, mask=mask, compact=True)
@@ -322,7 +329,7 @@ def test_a_batch_measures_the_compact_swept_capacity_and_searches_under_vmap():
     search = Search(compact=True, method="binned")  # paths only
     state = search.allocate(xs, scene.surface, x_prev=x_prevs)
     count = int(swept(scene.x_prev, scene.x, scene.surface).crossed.sum())
-    assert count <= state.path_sizes.contact_capacity < state.path_sizes.slave_capacity
+    assert count <= state.sizes["swept"].contact_capacity < state.sizes["swept"].slave_capacity
     entries, _ = jax.jit(jax.vmap(search.swept, (0, 0, 0, None)))(state, x_prevs, xs, scene.surface)
     assert not np.asarray(entries.overflow).any()
     for k in range(2):

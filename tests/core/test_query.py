@@ -3,7 +3,9 @@
 The nearest master node within the radius (a node-to-node search), written
 here as the protocol asks (a pair kernel, an assembly, two result types) and
 run by the library's own drivers, unchanged: the exhaustive one and the
-sized bucket sort, in its N-row and list forms, against a NumPy brute force.
+sized bucket sort, in its N-row and list forms, and ``Search``'s allocation
+and step, alone, beside the closest point and for a batch, against a NumPy
+brute force.
 """
 
 from typing import NamedTuple
@@ -13,11 +15,13 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
+from jaxcontact import Search, all_to_all
 from jaxcontact._pipeline import driver
 from jaxcontact._pipeline.pairs import EVERY_PAIR
 from jaxcontact._pipeline.sizes import measure, room_for_every_slot
-from jaxcontact._query.closest import Closest
+from jaxcontact._query.closest import CLOSEST, Closest
 from jaxcontact.scenes import rough_die_scene
+from tests.support.helpers import assert_same_contact
 from tests.support.tolerances import FLOAT64_RTOL
 
 
@@ -124,3 +128,47 @@ def test_the_sized_driver_runs_a_new_query_in_both_forms(scene, use_cells):
     assert isinstance(entries, NearestNodeList) and not bool(entries.overflow)
     listed = np.asarray(entries.node)[np.asarray(entries.found)]
     np.testing.assert_array_equal(listed, np.flatnonzero(expected[2]))
+
+
+@pytest.mark.x64
+@pytest.mark.parametrize("compact", [False, True])
+def test_search_sizes_and_steps_a_new_query_by_its_name(scene, compact):
+    die, expected = scene
+    search = Search(radius=float(die.radius), method="binned", compact=compact)
+    queries = {NEAREST_NODE: (die.x,), CLOSEST: (die.x,)}
+    state = search._allocate_queries(queries, die.surface)
+    assert set(state.sizes) == {"nearest node", "closest"}
+    assert bool(state.sizes["nearest node"].contact_capacity) == compact
+    radius = jnp.asarray(die.radius, die.x.dtype)
+    found, state = search._step(
+        NEAREST_NODE, state, (die.x,), die.surface, radius, None, EVERY_PAIR
+    )
+    assert not bool(found.overflow) and not bool(state.overflow)
+    if compact:
+        listed = np.asarray(found.node)[np.asarray(found.found)]
+        np.testing.assert_array_equal(listed, np.flatnonzero(expected[2]))
+    else:
+        _check(found, expected)
+        # The closest point from the same state, as allocated beside it.
+        contact, _ = search.closest(state, die.x, die.surface)
+        assert_same_contact(contact, all_to_all(die.x, die.surface, radius=die.radius), die.radius)
+
+
+@pytest.mark.x64
+def test_search_sizes_a_batch_of_a_new_query_with_the_same_code(scene):
+    die, expected = scene
+    search = Search(radius=float(die.radius), method="binned")
+    xs = jnp.stack([die.x, die.x.at[:, 1].add(die.radius)])  # the second lifted by r
+    state = search._allocate_queries({NEAREST_NODE: (xs,)}, die.surface, warn=False)
+    assert state.overflow.shape == (2,)
+    radius = jnp.asarray(die.radius, die.x.dtype)
+
+    def step(state, x):
+        return search._step(NEAREST_NODE, state, (x,), die.surface, radius, None, EVERY_PAIR)
+
+    found, state = jax.vmap(step)(state, xs)
+    assert not np.asarray(state.overflow).any()
+    nodes, segments = np.asarray(die.surface.nodes), np.asarray(die.surface.segments)
+    lifted = _brute_force(np.asarray(xs[1]), nodes, segments, float(die.radius))
+    for index, scene_expected in enumerate((expected, lifted)):
+        _check(jax.tree.map(lambda values, i=index: values[i], found), scene_expected)

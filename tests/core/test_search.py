@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from jaxcontact import (
+    QuerySizes,
     Search,
     SearchState,
     Sizes,
@@ -61,7 +62,7 @@ def test_closest_equals_all_to_all_at_every_step_and_outgrown_sizes_say_so(metho
     search = Search(radius=RADIUS, skin=skin, method=method, slack=1.0)
     with pytest.warns(UserWarning, match="hold no contact"):
         state = search.allocate(xs[0], surface_at(nodes[0], segments))
-    assert state.sizes.use_cells == (method == "binned")
+    assert state.sizes["closest"].use_cells == (method == "binned")
     step = jax.jit(search.closest)
     overflows = 0
     for x, at in zip(xs, nodes, strict=True):
@@ -90,7 +91,7 @@ def test_closest_in_a_scan_under_jit_equals_all_to_all_at_every_step():
     # Sized ahead of need for the whole run: the last step, then the first.
     last = search.allocate(xs[-1], surface_at(nodes[-1], segments))
     state = search.allocate(xs[0], surface_at(nodes[0], segments), at_least=last)
-    assert state.sizes.block_capacity >= last.sizes.block_capacity
+    assert state.sizes["closest"].block_capacity >= last.sizes["closest"].block_capacity
 
     def body(state, step):
         x, at = step
@@ -217,7 +218,7 @@ def test_exhaustive_method_is_all_to_all_and_swept_without_sizes():
     scene = cutting_scene(2_000, 18.0, x_tip_prev=18.2)
     search = Search(radius=RADIUS, method="exhaustive")
     state = search.allocate(scene.x, scene.surface, x_prev=scene.x_prev)
-    assert state.sizes is None and state.path_sizes is None
+    assert state.sizes == {}
     contact, _ = search.closest(state, scene.x, scene.surface)
     expected = all_to_all(scene.x, scene.surface, radius=RADIUS)
     for field, value in zip(expected._fields, expected, strict=True):
@@ -237,17 +238,19 @@ def test_state_is_a_pytree_with_static_sizes():
     # sizes give the same structure (one program), other sizes another
     # (compiled anew), and a jitted function sees them as Python values.
     assert not any(isinstance(leaf, (Sizes, int)) for leaf in leaves)
-    same = dataclasses.replace(state, sizes=dataclasses.replace(state.sizes))
+    sizes = state.sizes["closest"]
+    same = dataclasses.replace(state, sizes=QuerySizes({"closest": dataclasses.replace(sizes)}))
     assert jax.tree.structure(same) == tree
-    more = dataclasses.replace(state.sizes, block_capacity=state.sizes.block_capacity + 1)
-    assert jax.tree.structure(dataclasses.replace(state, sizes=more)) != tree
+    more = dataclasses.replace(sizes, block_capacity=sizes.block_capacity + 1)
+    grown = dataclasses.replace(state, sizes=QuerySizes({"closest": more}))
+    assert jax.tree.structure(grown) != tree
 
     @jax.jit
     def capacity(state):
-        assert isinstance(state.sizes.block_capacity, int)  # not traced
-        return jnp.zeros(state.sizes.slave_capacity)
+        assert isinstance(state.sizes["closest"].block_capacity, int)  # not traced
+        return jnp.zeros(state.sizes["closest"].slave_capacity)
 
-    assert capacity(state).shape == (state.sizes.slave_capacity,)
+    assert capacity(state).shape == (sizes.slave_capacity,)
     assert hash(search) == hash(Search(radius=RADIUS, skin=SKIN))
 
 
@@ -316,9 +319,9 @@ def test_a_state_is_refused_by_a_search_or_shapes_it_was_not_allocated_for():
         plain.closest(
             plain.allocate(jnp.stack([scene.x, scene.x]), scene.surface), scene.x, scene.surface
         )
-    with pytest.raises(ValueError, match="at_least must be a SearchState or Sizes"):
+    with pytest.raises(ValueError, match=r"at_least must be a SearchState or its sizes \(state"):
         search.allocate(scene.x, scene.surface, at_least=3)
-    with pytest.raises(ValueError, match="init with sizes= needs a Search with a radius"):
+    with pytest.raises(ValueError, match="init with closest sizes needs a Search with a radius"):
         Search(skin=SKIN).init(scene.x, scene.surface, sizes=state.sizes)
 
 

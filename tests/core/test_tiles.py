@@ -73,7 +73,7 @@ def test_tiles_keep_the_pair_rule_and_hashed_lists_of_self_contact():
     pairs = Pairs(scene.slave_node, self_contact=True)
     search = Search(radius=scene.radius)
     state = search.allocate(scene.x, scene.surface, pairs=pairs)
-    assert state.sizes.use_cells and state.sizes.buckets > 0
+    assert state.sizes["closest"].use_cells and state.sizes["closest"].buckets > 0
     got, _ = search.closest(state, scene.x, scene.surface, pairs=pairs)
     want = all_to_all(scene.x, scene.surface, radius=scene.radius, pairs=pairs)
     assert int(want.found.sum()) > 0

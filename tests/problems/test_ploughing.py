@@ -13,7 +13,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxcontact import _cli
+from jaxcontact import QuerySizes, _cli
 from jaxcontact.problems.ploughing import (
     Ploughing,
     mean_cutting_force,
@@ -122,11 +122,18 @@ def test_reuse_surface_slaves_and_growing_sizes_change_nothing(small):
     cramped = dataclasses.replace(
         every_node,
         search=dataclasses.replace(every_node.search, method="binned"),
-        sizes=dataclasses.replace(every_node.sizes, use_cells=True, block_size=8, block_capacity=1),
+        sizes=QuerySizes(
+            {
+                "closest": dataclasses.replace(
+                    every_node.sizes["closest"], use_cells=True, block_size=8, block_capacity=1
+                )
+            }
+        ),
     )
     assert bool(scan(mesh, controls, cramped)[0].overflow)
     final, history_again, held = simulate(mesh, controls, cramped)
-    assert not bool(final.overflow) and held.sizes.block_capacity > 1 and held.sizes.use_cells
+    held_sizes = held.sizes["closest"]
+    assert not bool(final.overflow) and held_sizes.block_capacity > 1 and held_sizes.use_cells
     # Found again only every few steps, and the count is the flags'.
     assert 1 <= int(final.rebuilds) <= config.steps // 3
     assert int(final.rebuilds) == history_again.rebuilt.sum()

@@ -149,7 +149,7 @@ def main(args: argparse.Namespace) -> int:
     material = plan.material
     print(
         f"ploughing: {summary.nodes:,} nodes, {mesh.triangles.shape[0]:,} triangles, "
-        f"{plan.sizes.num_slaves:,} slaves; steel E={material.young:g} MPa, "
+        f"{plan.sizes['closest'].num_slaves:,} slaves; steel E={material.young:g} MPa, "
         f"nu={material.poisson:g}, rho={material.density:g} t/mm3 x {material.mass_scale:g} "
         f"(mass scaling); {args.dtype}"
     )

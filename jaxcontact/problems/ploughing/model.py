@@ -47,7 +47,7 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
-from jaxcontact import Search, Sizes, Surface
+from jaxcontact import QuerySizes, Search, Surface
 from jaxcontact.forces import penalty
 from jaxcontact.problems.ploughing.config import SCENE_TOOL, TIP_HEIGHT, Ploughing
 from jaxcontact.scenes import grid
@@ -150,7 +150,7 @@ class Plan:
     damping: float
     material: Elastic
     search: Search
-    sizes: Sizes
+    sizes: QuerySizes
     all_slaves: bool = False
 
 
@@ -186,7 +186,7 @@ def setup(config: Ploughing) -> tuple[Mesh, Controls, Plan]:
 
     Example:
       >>> mesh, controls, plan = setup(Ploughing(300, travel=0.1))
-      >>> mesh.nodes.shape, plan.sizes.num_slaves, plan.steps
+      >>> mesh.nodes.shape, plan.sizes["closest"].num_slaves, plan.steps
       ((297, 2), 47, 24)
     """
     num_nodes, travel, speed, material = (
