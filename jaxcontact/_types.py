@@ -262,5 +262,9 @@ class QuerySizes(Mapping):
     def __hash__(self) -> int:
         return hash(self._items)
 
+    def __reduce__(self):
+        # Rebuilt through __init__: the slot cannot be set after it.
+        return QuerySizes, (dict(self._items),)
+
     def __repr__(self) -> str:
         return f"QuerySizes({dict(self._items)!r})"

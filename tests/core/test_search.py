@@ -5,6 +5,7 @@ the workpiece while the workpiece deforms) serves every test, so that the
 compiled programs are shared.
 """
 
+import copy
 import dataclasses
 
 import jax
@@ -252,6 +253,21 @@ def test_state_is_a_pytree_with_static_sizes():
 
     assert capacity(state).shape == (sizes.slave_capacity,)
     assert hash(search) == hash(Search(radius=RADIUS, skin=SKIN))
+
+
+def test_sizes_by_query_are_a_read_only_hashable_mapping():
+    sizes = Sizes(num_slaves=10, block_size=4, block_capacity=2)
+    paths = dataclasses.replace(sizes, for_paths=True)
+    mapped = QuerySizes({"swept": paths, "closest": sizes})
+    assert mapped == {"closest": sizes, "swept": paths} and list(mapped) == ["closest", "swept"]
+    assert hash(mapped) == hash(QuerySizes(dict(mapped))) and mapped["swept"] is paths
+    assert copy.deepcopy(mapped) == mapped and QuerySizes() == {} == QuerySizes(None)
+    with pytest.raises(AttributeError, match="read-only"):
+        mapped.extra = 1
+    with pytest.raises(KeyError):
+        mapped["nearest node"]
+    with pytest.raises(ValueError, match="sizes must map a query's name to its Sizes"):
+        QuerySizes({"closest": 3})
 
 
 @pytest.mark.x64_off
