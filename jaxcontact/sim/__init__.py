@@ -10,7 +10,9 @@
   gradients, differentiable by the implicit-function theorem;
 * ``coupling``: a ``Search``'s contacts to nodal forces: the mass-scaled
   penalty, the friction law (``Coulomb``, ``Zorev``), the penetration guards;
-* ``tools``: a rigid wedge with a rounded edge, differentiable in the rake.
+* ``tools``: a rigid wedge with a rounded edge, differentiable in the rake;
+* ``ale``: arbitrary Lagrangian-Eulerian steps on a Q4 mesh: a guarded
+  rezone and a conservative second-order remap every k steps.
 
 The problems set up from them live in ``jaxcontact.problems`` (``cutting``,
 ``ploughing``, ``hertz``), one package each; no part imports a problem, so
@@ -18,6 +20,7 @@ The problems set up from them live in ``jaxcontact.problems`` (``cutting``,
 has raises an ``AttributeError`` that names its replacement.
 """
 
+from jaxcontact.sim import ale as ale
 from jaxcontact.sim import coupling as coupling
 from jaxcontact.sim import elements as elements
 from jaxcontact.sim import explicit as explicit
