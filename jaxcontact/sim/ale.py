@@ -176,19 +176,26 @@ class Settings(NamedTuple):
     order: int = 2
 
 
-def _slide(x: Array, along: Array, weight) -> Array:
-    """The next position of each node on a boundary: towards the middle, by arc
-    length, of its two boundary neighbours, along the polyline through them."""
+def _slide(x: Array, along: Array, mean: Array, weight) -> Array:
+    """The next position of each node on a boundary: ``weight`` of its move to
+    ``mean`` (its edge neighbours' mean) along the boundary's tangent, taken
+    along the polyline through its two boundary neighbours (so the node stays
+    on the boundary). The neighbour inside the mesh pulls it under itself: a
+    boundary row sheared against the next one is straightened."""
     before, after = x[jnp.maximum(along[:, 0], 0)], x[jnp.maximum(along[:, 1], 0)]
-    to_before, to_after = before - x, after - x
     tiny = jnp.finfo(x.dtype).tiny
-    back = jnp.sqrt(jnp.maximum(jnp.sum(to_before**2, -1), tiny))
-    ahead = jnp.sqrt(jnp.maximum(jnp.sum(to_after**2, -1), tiny))
-    shift = weight * 0.5 * (ahead - back)  # + towards ``after``
-    direction = jnp.where(
-        (shift > 0)[:, None], to_after / ahead[:, None], to_before / back[:, None]
-    )
-    return x + jnp.abs(shift)[:, None] * direction
+
+    def length(vector):
+        return jnp.sqrt(jnp.maximum(jnp.sum(vector**2, -1), tiny))
+
+    tangent = (after - before) / length(after - before)[:, None]
+    shift = weight * jnp.sum((mean - x) * tangent, -1)  # + towards ``after``
+    forward = shift > 0
+    to = jnp.where(forward[:, None], after - x, before - x)
+    # At most half way to that neighbour: the node stays on its own two segments.
+    room = length(to)
+    distance = jnp.minimum(jnp.abs(shift), 0.5 * room)
+    return x + (distance / room)[:, None] * to
 
 
 def _smoothed(tables: Tables, x: Array, movable: Array, along: Array, settings: Settings):
@@ -201,7 +208,7 @@ def _smoothed(tables: Tables, x: Array, movable: Array, along: Array, settings: 
         around = jnp.where(real[..., None], x[jnp.maximum(tables.neighbours, 0)], 0)
         mean = around.sum(1) / count[:, None]
         inside = x + settings.weight * (mean - x)
-        moved = jnp.where(sliding[:, None], _slide(x, along, settings.weight), inside)
+        moved = jnp.where(sliding[:, None], _slide(x, along, mean, settings.weight), inside)
         return jnp.where(movable[:, None], moved, x)
 
     return jax.lax.fori_loop(0, settings.sweeps, sweep, x)
@@ -232,9 +239,9 @@ def rezone(
       settings: the weight, the sweeps and the guard's floor (None: ``Settings()``).
 
     The smoothing: each sweep moves a node inside the mesh ``weight`` of the way
-    to its edge neighbours' mean, and a node on a boundary ``weight`` of the way
-    to the middle (by arc length) of its two boundary neighbours, along the
-    polyline through them, so that the boundary keeps its shape.
+    to its edge neighbours' mean, and a node on a boundary ``weight`` of that
+    move's part along the boundary, along the polyline through its two boundary
+    neighbours, so that the boundary keeps its shape.
 
     The guard: no element the rezone touches ends below the smaller of its own
     ``quality`` and ``settings.floor``. Each node moves a blend ``1, 1/2, 1/4,
