@@ -74,6 +74,12 @@ STEADY_MEAN_RTOL = 0.01
 # the float64 rounding of their logarithms.
 FLAT_SLOPE_ATOL = 1e-9
 
+# Oxley's equilibria (machining.oxley) at its solution, MPa: its roots are
+# refined until a residual is below 1e-9 MPa or the step below 1e-12 rad (phi)
+# or 1e-10 (C), which the residuals' slopes (~1e4 MPa/rad, ~1e2 MPa) make at
+# most ~1e-8 MPa.
+OXLEY_RESIDUAL_ATOL = 1e-7
+
 # --- The benchmarks' records ---------------------------------------------------
 
 # A force trace's last point against the run's travel: the point is the mean
