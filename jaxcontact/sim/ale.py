@@ -164,8 +164,8 @@ class Settings(NamedTuple):
       weight: the share of the way to its neighbours' mean a sweep moves a
         node (the relaxation of Laplacian smoothing, 0 to 1).
       sweeps: the Jacobi sweeps of one rezone.
-      floor: the guard's quality (``quality``, the sine of a corner's angle):
-        no element ends below the smaller of its own quality and ``floor``.
+      floor: the guard's floor (``rezone``) of an element's ``quality`` (the
+        sine of a corner's angle) and of its area over its reference area.
       order: the remap's order: 2, van Leer; 1, the donor cell.
     """
 
@@ -244,23 +244,30 @@ def rezone(
     neighbours, so that the boundary keeps its shape.
 
     The guard: no element the rezone touches ends below the smaller of its own
-    ``quality`` and ``settings.floor``. Each node moves a blend ``1, 1/2, 1/4,
-    1/8`` or ``0`` of the way to its smoothed place, the largest for which its
-    elements pass; if any element still fails, no node moves. So a folded
-    element is never made, and the least quality never falls. The blends are
-    chosen on values without gradient: a gradient through a rezone is that of
-    the chosen blends.
+    ``quality`` and ``settings.floor``, nor below the smaller of its own area
+    over its area on the reference mesh (``quads.nodes``) and ``settings.floor``:
+    a rezone neither makes a sliver nor squeezes an element towards erosion.
+    Each node moves a blend ``1, 1/2, 1/4, 1/8`` or ``0`` of the way to its
+    smoothed place, the largest for which its elements pass; if any element
+    still fails, no node moves. So a folded element is never made, and the
+    least quality never falls. The blends are chosen on values without
+    gradient: a gradient through a rezone is that of the chosen blends.
     """
     settings = Settings() if settings is None else settings
     target = _smoothed(tables, x, movable, along, settings)
     start, goal = jax.lax.stop_gradient(x), jax.lax.stop_gradient(target)
-    before = quality(quads, start)
+    reference = areas(quads, quads.nodes)
+
+    def measures(x):
+        return quality(quads, x), areas(quads, x) / reference
+
     touched = movable[quads.quads].any(1)
-    floor = jnp.minimum(before, settings.floor)
+    floors = [jnp.minimum(before, settings.floor) for before in measures(start)]
 
     def failing(blend):
-        after = quality(quads, start + blend[:, None] * (goal - start))
-        return touched & (after < floor)
+        after = measures(start + blend[:, None] * (goal - start))
+        worse = [now < floor for now, floor in zip(after, floors, strict=True)]
+        return touched & (worse[0] | worse[1])
 
     def mark(fail):
         """bool[N]: nodes of a failing element."""

@@ -13,7 +13,7 @@ import math
 import numpy as np
 from jax import Array
 
-from jaxcontact.sim import materials, tools
+from jaxcontact.sim import ale, materials, tools
 
 CLEARANCE_DEG = 7.0
 MU = 0.3  # Coulomb's coefficient on the tool by default
@@ -51,8 +51,18 @@ class Cutting:
         edge node).
       ramp: share of the travel over which the tool's speed ramps up.
       erode: the Jacobian ratio below which an element is eroded.
-      shear_factor: Zorev's sticking limit, in units of the material's initial
-        shear flow stress ``A / sqrt 3`` (``coupling.Zorev``).
+      shear_factor: Zorev's sticking limit ``m`` (``coupling.Zorev``): the
+        friction stress in sticking is ``m k``, ``k`` the shear flow stress
+        that ``friction_limit`` names.
+      friction_limit: which shear flow stress ``k``: ``"flow"``, the chip's
+        own, ``sigma_JC(eps_p, rate, T) / sqrt 3`` of the elements at each node
+        (Oxley's sticking takes ``m = 1``); ``"initial"``, the material's
+        initial ``A / sqrt 3`` everywhere (a constant cap).
+      ale: the chip root's rezone and remap (``sim.ale.Settings``: every how
+        many steps, the smoothing, the guard, the remap's order); None: a
+        Lagrangian mesh throughout.
+      window: the rezoned region: nodes within this many uncut thicknesses of
+        the edge's centre.
       rake_face: the rake face's length (mm): a chip longer than it climbs
         over the tool's top.
       breaker: ``(land, angle, length)``: a chip breaker's backwall, the
@@ -80,6 +90,9 @@ class Cutting:
     ramp: float = 0.05
     erode: float = 0.1
     shear_factor: float = 0.5
+    friction_limit: str = "initial"
+    ale: ale.Settings | None = None
+    window: float = 3.0
     rake_face: float = 1.0
     breaker: tuple[float, float, float] | None = None
     ahead: float | None = None
@@ -87,6 +100,15 @@ class Cutting:
     work_material: materials.JohnsonCook = materials.AISI_1045
 
     def __post_init__(self):
+        if self.friction_limit not in ("flow", "initial"):
+            raise ValueError(
+                "Cutting.friction_limit must be 'flow' (the chip's own shear flow stress) or "
+                f"'initial' (A / sqrt 3); got {self.friction_limit!r}"
+            )
+        if self.ale is not None and not isinstance(self.ale, ale.Settings):
+            raise ValueError(
+                f"Cutting.ale must be a sim.ale.Settings or None; got {type(self.ale).__name__}"
+            )
         if not isinstance(self.work_material, materials.JohnsonCook):
             raise ValueError(
                 "Cutting.work_material must be a materials.JohnsonCook (the friction limit "
