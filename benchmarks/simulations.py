@@ -57,6 +57,17 @@ each mesh over Hertz's, and the errors against the element size.
     python benchmarks/simulations.py                  # about 20 min on 2 cores
     python benchmarks/simulations.py --quick          # a coarse cut, no others, 2,000 nodes
                                                       # ploughing, Hertz at 12 and 24 elements
+    python benchmarks/simulations.py --ale            # about 8 min: the ALE chip root and the
+                                                      # chip's own friction limit against
+                                                      # Extended Oxley, a table on stdout
+
+``--ale`` runs only ``ALE_RUNS`` (issue 51's checks, not yet part of the stored record): each
+an orthogonal cut on the default mesh, 0.8 mm of travel, mu = 0.3, the Lagrangian default
+first, then the chip root rezoned and remapped every 20 steps (``sim.ale``) at the default
+cap, at A / sqrt 3, and at the chip's own shear flow stress (``friction_limit="flow"``,
+m = 1) at 100 m/min h 0.10 mm rake 0°, h 0.15 mm, rake -10°, 200 m/min h 0.15 mm rake -7°
+and 300 m/min h 0.15 mm rake +5°; beside each, ``cutting.machining.oxley`` (Lalwani et al.
+2009) at the same speed, thickness and rake.
 """
 
 from __future__ import annotations
@@ -75,7 +86,9 @@ import numpy as np
 
 from benchmarks.harness import _run, report, style
 from jaxcontact.problems import cutting, hertz
+from jaxcontact.problems.cutting import machining
 from jaxcontact.problems.ploughing.demo import run_demo
+from jaxcontact.sim import ale
 
 TITLE = "Simulations: orthogonal cutting, ploughing, a cylinder against Hertz"
 POINTS = 300  # a force trace's points in the record: means over as many equal runs of steps
@@ -704,5 +717,45 @@ def draw(record, plt):
     return figure
 
 
+# -- the ALE chip root against Extended Oxley (--ale) -------------------------------------
+
+ALE_EVERY = ale.Settings(every=20)
+# Zorev's limit at the chip's own shear flow stress, m = 1 (Oxley's sticking).
+ALE_OWN = {"ale": ALE_EVERY, "shear_factor": 1.0, "friction_limit": "flow"}
+# fmt: off
+ALE_RUNS = (
+    ("Lagrangian, cap A/(2√3)", {}, 0.0),
+    ("ALE, cap A/(2√3)", {"ale": ALE_EVERY}, 0.0),
+    ("ALE, cap A/√3", {"ale": ALE_EVERY, "shear_factor": 1.0}, 0.0),
+    ("ALE, chip's own k", ALE_OWN, 0.0),
+    ("ALE, chip's own k, h 0.15", {**ALE_OWN, "uncut": 0.15}, 0.0),
+    ("ALE, chip's own k, rake -10°", ALE_OWN, -10.0),
+    ("ALE, own k, 200 m/min h 0.15 rake -7°", {**ALE_OWN, "speed": 200.0, "uncut": 0.15}, -7.0),
+    ("ALE, own k, 300 m/min h 0.15 rake +5°", {**ALE_OWN, "speed": 300.0, "uncut": 0.15}, 5.0),
+)
+# fmt: on
+
+
+def ale_table() -> int:
+    """``--ale``: each of ``ALE_RUNS`` with Oxley's forces beside it, a Markdown table."""
+    print("| run | F_c | F_t | chip ratio | eroded | Oxley F_c | Oxley F_t | Oxley ratio |")
+    print("|---|---|---|---|---|---|---|---|")
+    for label, changes, rake in ALE_RUNS:
+        cut = cutting.Cutting(**changes)
+        model, state, record, frames, seconds = cutting.run(cut, rake, cutting.MU)
+        run = cutting.summary(model, state, record, frames, seconds, rake, cutting.MU)
+        theory = machining.oxley(speed=cut.speed, uncut=cut.uncut, rake=rake)
+        print(
+            f"| {label} | {run['cutting_force_N_per_mm']:.1f} | {run['thrust_force_N_per_mm']:.1f}"
+            f" | {run['chip_thickness_ratio']:.2f} | {run['eroded_elements']} | "
+            f"{theory.cutting_force:.1f} | {theory.thrust_force:.1f} | "
+            f"{theory.chip_thickness_ratio:.2f} |",
+            flush=True,
+        )
+    return 0
+
+
 if __name__ == "__main__":
+    if sys.argv[1:] == ["--ale"]:
+        sys.exit(ale_table())
     sys.exit(_run.suite("simulations", run, draw, __doc__.splitlines()[0]))
