@@ -341,7 +341,8 @@ def remap(
     Args:
       tables: ``tables(quads)``.
       quads: the mesh (its connectivity).
-      x_old, x_new: f[N, 2], the nodes before and after the rezone.
+      x_old: f[N, 2], the nodes before the rezone.
+      x_new: f[N, 2], the nodes after it.
       mass: f[E], each element's mass (any unit).
       fields: a pytree of f[E, ...], values per unit mass (specific: a stress,
         a plastic strain, a temperature), one per element.
