@@ -351,10 +351,15 @@ def own_surface(mesh: Workpiece, x: Array, released: Array, alive: Array) -> jax
     return jaxcontact.Surface(x, mesh.segments, mask=real & alive[mesh.owner])
 
 
+def _at_nodes(mesh: Workpiece, flags: Array) -> Array:
+    """i32[N]: how many of each node's elements ``flags`` (bool[E]) marks."""
+    count = jnp.zeros(mesh.quads.nodes.shape[0], jnp.int32)
+    return count.at[mesh.quads.quads].add(flags[:, None].astype(jnp.int32))
+
+
 def held(mesh: Workpiece, alive: Array) -> Array:
     """bool[N]: nodes of at least one element not eroded (the others are debris)."""
-    count = jnp.zeros(mesh.quads.nodes.shape[0], jnp.int32)
-    return count.at[mesh.quads.quads].add(alive[:, None].astype(jnp.int32)) > 0
+    return _at_nodes(mesh, alive) > 0
 
 
 def setup(cut: Cutting) -> tuple[Model, State]:
@@ -391,6 +396,13 @@ def setup(cut: Cutting) -> tuple[Model, State]:
     return model, start
 
 
+def _on_tool(model: Model, tool_state, x, tool: jaxcontact.Surface, kept):
+    """Every node's contact with the tool, each side of the parting line on its own
+    outline (``CHIP_SIDE``, ``BASE_SIDE``): ``(contact, tool_state)``."""
+    pairs = jaxcontact.Pairs(slave_body=model.mesh.side)
+    return model.tool_search.closest(tool_state, x, tool, mask=kept, pairs=pairs)
+
+
 def contacts(model: Model, tool_state, own_state, x, lowest_x, rake, released, alive, kept):
     """A step's contact detection, the two searches: ``(tool, on_tool,
     tool_state, slip, own, on_own, own_state)``, the surfaces with what each
@@ -398,9 +410,7 @@ def contacts(model: Model, tool_state, own_state, x, lowest_x, rake, released, a
     (benchmarks/simulations.py's ``detection_share``)."""
     mesh = model.mesh
     tool = tool_surface(model.cut, lowest_x, rake)
-    on_tool, tool_state = model.tool_search.closest(
-        tool_state, x, tool, mask=kept, pairs=jaxcontact.Pairs(slave_body=mesh.side)
-    )
+    on_tool, tool_state = _on_tool(model, tool_state, x, tool, kept)
     slip = tool_state.slip
     own = own_surface(mesh, x, released, alive)
     on_own, own_state = model.own_search.closest(
@@ -550,25 +560,15 @@ def rezone(model: Model, state: State, rake) -> State:
     held_line = ~state.released | tip
     line = jnp.zeros(x.shape[0], bool).at[mesh.base_line].set(held_line)
     line = line.at[mesh.chip_line].set(held_line)
-    whole = (
-        jnp.zeros(x.shape[0], jnp.int32)
-        .at[mesh.quads.quads]
-        .add((~state.alive)[:, None].astype(jnp.int32))
-    )
-    movable = near & ~mesh.pinned & ~line & (whole == 0)
+    whole = _at_nodes(mesh, ~state.alive) == 0
+    movable = near & ~mesh.pinned & ~line & whole
     moved = ale.rezone(mesh.tables, mesh.quads, x, movable, mesh.along, settings)
     mass, points = ale.remap_points(
         mesh.tables, mesh.quads, x, moved, state.mass, body.points, order=settings.order
     )
     v = ale.remap_velocity(mesh.tables, mesh.quads, x, moved, body.v)
-    before = tool_position(cut, model.start_x, state.step - 1)
-    _, tool_state = model.tool_search.closest(
-        state.tool,
-        moved - cut.dt * v,
-        tool_surface(cut, before, rake),
-        mask=held(mesh, state.alive),
-        pairs=jaxcontact.Pairs(slave_body=mesh.side),
-    )
+    before = tool_surface(cut, tool_position(cut, model.start_x, state.step - 1), rake)
+    _, tool_state = _on_tool(model, state.tool, moved - cut.dt * v, before, held(mesh, state.alive))
     body = body._replace(x=moved, v=v, points=points)
     return state._replace(body=body, tool=tool_state, mass=mass)
 
@@ -629,8 +629,10 @@ def mean_forces(model: Model, state: State, rake, mu, steps: int | None = None, 
     ``steps`` steps (the whole cut by default) from ``state``: differentiable in
     ``rake`` (radians) and ``mu``."""
     steps = model.cut.steps if steps is None else steps
-    until = state.step + steps
-    _, record = _scan(model, state, rake, mu, chunk_steps(model.cut, steps), until)
+    length = chunk_steps(model.cut, steps)
+    # Held still past ``steps`` only where whole ALE cycles run longer.
+    until = None if length == steps else state.step + steps
+    _, record = _scan(model, state, rake, mu, length, until)
     window = max(1, round(last * steps))
     return record.force[steps - window : steps].mean(0)
 
