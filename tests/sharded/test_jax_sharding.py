@@ -274,15 +274,26 @@ SPLIT = Contact(*[P("slaves")] * len(Contact._fields))._replace(overflow=P())
 
 
 def _shard_map(function, in_specs, out_specs):
-    """``function`` mapped over the 4 devices' slaves, as docs/guides/devices.md does.
+    """``function`` mapped over the 4 devices' slaves, as docs/guides/devices.md does,
+    its arguments first placed as ``in_specs`` says.
 
     check_vma=False: the detectors' conds return constants where they skip
-    work, which shard_map's check of varying axes refuses."""
-    return jax.jit(
-        jax.shard_map(
-            function, mesh=_slaves_mesh(), in_specs=in_specs, out_specs=out_specs, check_vma=False
-        )
+    work, which shard_map's check of varying axes refuses. The placement:
+    shard_map on explicit axes refuses an input whose sharding differs from
+    its spec (JAX 0.10), and a ``jax.reshard`` inside the program places a
+    host array and a traced one alike."""
+    mesh = _slaves_mesh()
+    mapped = jax.shard_map(
+        function, mesh=mesh, in_specs=in_specs, out_specs=out_specs, check_vma=False
     )
+
+    def placed(*args):
+        def put(spec, arg):
+            return jax.tree.map(lambda value: jax.reshard(value, NamedSharding(mesh, spec)), arg)
+
+        return mapped(*map(put, in_specs, args))
+
+    return jax.jit(placed)
 
 
 def _slaves_mesh():
