@@ -248,10 +248,14 @@ def rezone(
     over its area on the reference mesh (``quads.nodes``) and ``settings.floor``:
     a rezone neither makes a sliver nor squeezes an element towards erosion.
     Each node moves a blend ``1, 1/2, 1/4, 1/8`` or ``0`` of the way to its
-    smoothed place, the largest for which its elements pass; if any element
-    still fails, no node moves. So a folded element is never made, and the
-    least quality never falls. The blends are chosen on values without
-    gradient: a gradient through a rezone is that of the chosen blends.
+    smoothed place, the largest for which its elements pass. The nodes of an
+    element that still fails are held (blend 0), and again until no element
+    fails: holding a node can make a neighbouring element fail, whose nodes are
+    then held in turn, so one bad element holds only the nodes around it and
+    every other node still moves. It ends, as each pass holds at least one more
+    node and an element of held nodes does not fail. So a folded element is never
+    made, and the least quality never falls. The blends are chosen on values
+    without gradient: a gradient through a rezone is that of the chosen blends.
     """
     settings = Settings() if settings is None else settings
     target = _smoothed(tables, x, movable, along, settings)
@@ -265,9 +269,13 @@ def rezone(
     floors = [jnp.minimum(before, settings.floor) for before in measures(start)]
 
     def failing(blend):
+        # An element whose nodes are all held does not fail: its measures, taken
+        # again in another program, may differ from its floors in the last bit,
+        # and the holding below must end.
+        moved = (blend[quads.quads] > 0).any(1)
         after = measures(start + blend[:, None] * (goal - start))
         worse = [now < floor for now, floor in zip(after, floors, strict=True)]
-        return touched & (worse[0] | worse[1])
+        return touched & moved & (worse[0] | worse[1])
 
     def mark(fail):
         """bool[N]: nodes of a failing element."""
@@ -277,9 +285,11 @@ def rezone(
     def halve(_, blend):
         return jnp.where(mark(failing(blend)), 0.5 * blend, blend)
 
+    def hold(blend):
+        return jnp.where(mark(failing(blend)), 0, blend)
+
     blend = jax.lax.fori_loop(0, GUARD_HALVINGS, halve, jnp.ones(x.shape[0], x.dtype))
-    blend = jnp.where(mark(failing(blend)), 0, blend)
-    blend = jnp.where(jnp.any(failing(blend)), 0, blend)
+    blend = jax.lax.while_loop(lambda blend: jnp.any(failing(blend)), hold, blend)
     blend = jax.lax.stop_gradient(blend)
     return x + blend[:, None] * (target - x)
 

@@ -248,6 +248,39 @@ def test_guard_takes_back_a_move_that_would_fold():
     assert bool(jnp.all(after_q >= jnp.minimum(before_q, 0.5) - FLOAT64_ATOL))
 
 
+def test_one_failing_element_holds_only_the_nodes_around_it():
+    # A 12 x 3 strip, its interior wobbled by up to 0.3 of an element over its
+    # first four columns and 0.09 beyond: a floor of 1 (no element may get worse)
+    # holds some nodes in the middle, and every node far from them still moves
+    # a blend (1, 1/2, 1/4 or 1/8) of the way to its smoothed place, on both sides.
+    mesh = q4.grid_mesh(12.0, 3.0, 12, 3, DENSITY, jnp.float64)
+    x = np.asarray(mesh.nodes).copy()
+    inside = (x[:, 0] > 0) & (x[:, 0] < 12) & (x[:, 1] > 0) & (x[:, 1] < 3)
+    rng = np.random.default_rng(4)
+    scale = np.where(x[inside, :1] < 4, 1.0, 0.3)
+    x[inside] += rng.uniform(-0.3, 0.3, (inside.sum(), 2)) * scale
+    x = jnp.asarray(x)
+    tables, movable = ale.tables(mesh), jnp.asarray(inside)
+    along = jnp.full((x.shape[0], 2), -1, jnp.int32)
+    settings = ale.Settings(weight=1.0, sweeps=2, floor=1.0)
+    after = np.asarray(ale.rezone(tables, mesh, x, movable, along, settings))
+    free = np.asarray(ale.rezone(tables, mesh, x, movable, along, settings._replace(floor=-1.0)))
+    was = np.asarray(x)
+    held = inside & (np.abs(after - was).max(1) == 0) & (np.abs(free - was).max(1) > 0)
+    column = np.asarray(mesh.nodes)[:, 0]
+    assert held.any()  # an element failed
+    far = inside & ((column < column[held].min() - 2) | (column > column[held].max() + 2))
+    assert far.sum() >= 4
+    step, full = after[far] - was[far], free[far] - was[far]
+    blend = np.sum(step * full, 1) / np.sum(full * full, 1)
+    blends = np.array([1, 0.5, 0.25, 0.125])
+    nearest = blends[np.abs(blend[:, None] - blends).argmin(1)]
+    np.testing.assert_allclose(blend, nearest, rtol=FLOAT64_RTOL, atol=0)
+    np.testing.assert_allclose(step, nearest[:, None] * full, rtol=0, atol=FLOAT64_ATOL)
+    before_q, after_q = ale.quality(mesh, x), ale.quality(mesh, jnp.asarray(after))
+    assert bool(jnp.all(after_q >= jnp.minimum(before_q, 1.0) - FLOAT64_ATOL))
+
+
 def test_gradients_through_rezone_and_remap_match_central_differences():
     mesh, inside = grid(nx=4, ny=3, width=4.0, height=3.0)
     tables = ale.tables(mesh)
