@@ -11,6 +11,6 @@ rows, timing, the check against a reference, figure style, and ``internals``, th
 importing jaxcontact's private names) and the peers' code in ``peer_codes``. Optional packages
 (matplotlib, tqdm, scipy, shapely, jax-md, libigl, numba, ipctk: the ``bench``, ``peers`` and
 ``peers2`` extras) are imported where used; a missing one is reported, never a crash.
-The one-off experiments of earlier rounds are kept at git tag ``benchmarks-archive-1.2``
+The one-off experiments of earlier rounds are kept in commit ``5928bf7f76cc``
 (``benchmarks/archive/``), not in the tree.
 """

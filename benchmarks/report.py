@@ -36,8 +36,8 @@ sys.path.insert(0, str(ROOT))  # benchmarks.* when run as a script
 from benchmarks.harness import report  # noqa: E402
 
 # The maintained suites, in the report's order: name -> heading. A suite is
-# benchmarks/<name>.py; the experiments that are not maintained are at git tag
-# benchmarks-archive-1.2 (benchmarks/archive/).
+# benchmarks/<name>.py; the experiments that are not maintained are in commit
+# 5928bf7f76cc (benchmarks/archive/).
 SUITES = {
     "peers": "Closest point against other codes",
     "swept_peers": "Path crossing against other codes",

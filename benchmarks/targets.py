@@ -28,8 +28,8 @@ default, every call ended by ``block_until_ready``; median and 10th-90th percent
 Before anything runs, glibc's allocator is set to keep freed pages (``_run.reuse_pages``):
 with its start values each call's large buffers are mapped afresh, at up to 4x the call's
 time for the dense form at 10^6 nodes and 5x for the numba grid on the chip's outline at
-10^5, depending on what ran before in the process (the archive's ``malloc.py``, git tag
-``benchmarks-archive-1.2``).
+10^5, depending on what ran before in the process (the archive's ``malloc.py``, commit
+``5928bf7f76cc``).
 
 The first table: each method's time, the numba grid's (one thread) median over it (1 or more
 meets target 1: at least as fast), and its answer's check. The second, each ``Search`` step's
@@ -86,7 +86,7 @@ QUICK = (
     ("chip outline, self-contact", 10_000, None),
 )
 # FULL without the rough die at 10^6 x 10^5: the scenes of the archive's threads.py and
-# malloc.py (git tag benchmarks-archive-1.2).
+# malloc.py (commit 5928bf7f76cc).
 WITHOUT_LARGEST_DIE = tuple(s for s in FULL if not (s[0] == "rough die" and s[1] > 10**5))
 WHOLE = "Search.closest (whole search)"
 WHOLE_COMPACT = "Search.closest (compact, whole search)"
@@ -157,8 +157,8 @@ def search_steps(x, surface, radius, pair) -> dict:
 
 def whole_search_steps(x, surface, radius, pair) -> dict:
     """``{"dense" | "compact": (jitted step, args)}``: the whole search (``skin=0``) in both
-    result forms (the archive's ``threads.py`` and ``malloc.py`` timed them; git tag
-    ``benchmarks-archive-1.2``)."""
+    result forms (the archive's ``threads.py`` and ``malloc.py`` timed them; commit
+    ``5928bf7f76cc``)."""
     steps = search_steps(x, surface, radius, pair)
     return {"dense": steps[WHOLE], "compact": steps[WHOLE_COMPACT]}
 

@@ -157,7 +157,7 @@ class CrossingList(NamedTuple):
 
 # With this many segments or fewer, each kept slave meets every segment: a
 # running minimum over M broadcast segments beats per-slave candidate gathers
-# (measured: tag benchmarks-archive-1.2:benchmarks/archive/bucket.py finds the crossover).
+# (measured: commit 5928bf7f76cc:benchmarks/archive/bucket.py finds the crossover).
 # ``Search(cells_above=...)``.
 CELLS_ABOVE = 48
 # Kept slaves are searched in chunks of this many rows, fullest lists first.

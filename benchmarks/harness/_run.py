@@ -295,8 +295,8 @@ def reuse_pages() -> None:
     and glibc moves the threshold itself as large blocks are freed: a call's
     time then depends on what ran before it in the process (the numba grid on
     the chip's outline at 10^4 nodes: 4.4-4.7 ms in a new process, 1.0 ms
-    after a scene of 10^6 nodes). The archive's ``malloc.py`` (git tag
-    ``benchmarks-archive-1.2``) measured both settings; every program ran as fast
+    after a scene of 10^6 nodes). The archive's ``malloc.py`` (commit
+    ``5928bf7f76cc``) measured both settings; every program ran as fast
     or faster with pages reused, so the comparisons of peers set it for all of them.
     """
     mallopt = glibc_mallopt()
@@ -338,7 +338,7 @@ def suite(name, run, draw, description, argv=None, *, options=()) -> int:
         parser.add_argument(*flags, **keywords)
     argv = sys.argv[1:] if argv is None else list(argv)
     args = parser.parse_args(argv)
-    reuse_pages()  # every peer at its best (malloc.py at git tag benchmarks-archive-1.2)
+    reuse_pages()  # every peer at its best (malloc.py in commit 5928bf7f76cc)
     jax.config.update("jax_enable_x64", True)  # float64 scenes and variants beside float32
     rec = _record(name, args, run(args), argv)
     rec["allocator"] = list(_allocator)

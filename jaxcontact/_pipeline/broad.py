@@ -137,7 +137,7 @@ def cull_blocks(
     where a box per block costs XLA a copy of each coordinate column and
     min/max reductions over it (the broad phase with the kept rows measured
     3.7x faster on the CPU at 10^6 rows, 4.8 against 1.3 ms, and 1.5x at
-    81,939, with tag benchmarks-archive-1.2:benchmarks/archive/stages.py). It keeps no block
+    81,939, with commit 5928bf7f76cc:benchmarks/archive/stages.py). It keeps no block
     a box per block would drop. A row that can be found lies in the target box
     (``conservative_margin``), so the rows found are the same.
     """

@@ -28,7 +28,7 @@ def dot(u: Array, v: Array) -> Array:
 
     ``jnp.dot`` under ``vmap`` becomes a batched ``dot_general`` that XLA does
     not fuse with its neighbours; the written-out sum fuses (measured 10-40x
-    faster on the CPU with tag benchmarks-archive-1.2:benchmarks/archive/dense.py).
+    faster on the CPU with commit 5928bf7f76cc:benchmarks/archive/dense.py).
     """
     return u[0] * v[0] + u[1] * v[1]
 

@@ -31,7 +31,7 @@ def as_array(values, dtype=None):
     NumPy arrays and Python or NumPy scalars stay NumPy arrays: a jitted
     program takes them as arguments for a few microseconds each, where
     ``jnp.asarray`` puts each on the device apart (about 0.1 ms on the CPU,
-    measured with tag benchmarks-archive-1.2:benchmarks/archive/one_call.py). JAX arrays
+    measured with commit 5928bf7f76cc:benchmarks/archive/one_call.py). JAX arrays
     and tracers go through ``jnp.asarray``.
     """
     if isinstance(values, jax.Array | jax.core.Tracer):

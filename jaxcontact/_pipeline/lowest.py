@@ -38,7 +38,7 @@ def lowest_score(
     one fused pass over the rows per step. Against an (N, M) plane reduced by
     ``argmin`` it is 3.7x faster with the 20-segment cutting tool and slower
     with the paper's 2 segments (measured with the repository's
-    benchmarks-archive-1.2:benchmarks/archive/dense.py). Steps run in unrolled
+    5928bf7f76cc:benchmarks/archive/dense.py). Steps run in unrolled
     blocks inside a ``lax.scan``, so compile time stays flat as steps grow.
 
     Args:
@@ -98,7 +98,7 @@ def lowest_in_blocks(
     searches whose steps gather their segments: one gather of a block's
     segments instead of one per step, and a row reduction in place of the
     unrolled minimum (measured cheaper to compile with the repository's
-    benchmarks-archive-1.2:benchmarks/archive/compile_ops.py).
+    5928bf7f76cc:benchmarks/archive/compile_ops.py).
     ``steps_needed`` as in ``lowest_score``.
     """
     choice = jnp.full((num_rows,), -1, jnp.int32)
@@ -157,7 +157,7 @@ def one_scene_at_a_time(fn):
     them; the batched rest (assembling, writing rows) stays vectorised. On
     the CPU that measured as fast per scene as one unbatched call, where
     plain batching was up to 6x slower (measured with the repository's
-    benchmarks-archive-1.2:benchmarks/archive/scaling.py). On other
+    5928bf7f76cc:benchmarks/archive/scaling.py). On other
     backends the search is batched as usual.
     Arguments must be arrays (or pytrees of arrays); close over static values.
     """
@@ -168,7 +168,7 @@ def one_scene_at_a_time(fn):
         del axis_size
         if jax.default_backend() != "cpu":
             # Accelerators run the batch as one vectorised program (not
-            # measured: tag benchmarks-archive-1.2:benchmarks/archive/scaling.py measures it).
+            # measured: commit 5928bf7f76cc:benchmarks/archive/scaling.py measures it).
             axes = jax.tree.map(lambda flag: 0 if flag else None, in_batched)
             result = jax.vmap(fn, in_axes=tuple(axes))(*args)
             return result, jax.tree.map(lambda _: True, result)

@@ -101,8 +101,8 @@ def _search_rows(pair_value, segments: Segments, listed: CellLists, capacity: in
     # Blocks of 8 slots, each gathered at once and reduced along its rows:
     # one slot at a time (an unrolled running minimum, a gather per slot)
     # makes 47 more kernels of the binned closest step, which compiles 1.5x
-    # slower (measured 5.9 against 3.9 s pinned, tag
-    # benchmarks-archive-1.2:benchmarks/archive/compile_probe.py) for the same
+    # slower (measured 5.9 against 3.9 s pinned, commit
+    # 5928bf7f76cc:benchmarks/archive/compile_probe.py) for the same
     # answers bit for bit and no run time gained beyond noise (measured with the repository's
     # benchmarks/targets.py, both cores).
     # Every row runs as many slots as the fullest list among them needs, not

@@ -6,7 +6,7 @@ program has 40-200 kernels: 150-600 maps per program, freed only by
 ``jax.clear_caches()``. A process that calls a detector at hundreds of
 shapes (a sweep over mesh sizes, a notebook, a test suite) reaches the
 kernel's ``vm.max_map_count`` (65,530 by default) and XLA's compiler
-crashes (measured with tag benchmarks-archive-1.2:benchmarks/archive/long_process.py).
+crashes (measured with commit 5928bf7f76cc:benchmarks/archive/long_process.py).
 
 So the one-call detectors, called plainly on concrete arrays, pad the
 slaves, the segments and the master nodes up to a size class (``size_class``:
@@ -140,7 +140,7 @@ def cut_rows(result, num_rows: int | None):
     # On the CPU: host views, cut, and back as the arguments of a program that
     # returns them (copies only: no kernel is compiled, nothing is mapped).
     # A jitted argument costs microseconds; jax.device_put about 0.1 ms an
-    # array (measured with tag benchmarks-archive-1.2:benchmarks/archive/one_call.py).
+    # array (measured with commit 5928bf7f76cc:benchmarks/archive/one_call.py).
     cut = jax.tree.map(
         lambda values: np.asarray(values)[:num_rows] if values.ndim else values, result
     )

@@ -95,7 +95,7 @@ def squared_norm(vectors: Array) -> Array:
     Written per column: XLA's CPU code runs ``jnp.sum(..., axis=-1)`` over a
     length-2 axis as a loop per row; the skin check (``candidates.expired``,
     jitted alone) on 81,939 rows measured 0.36-0.38 ms that way and 0.2 ms
-    per column (tag benchmarks-archive-1.2:benchmarks/archive/search_step.py times the whole step).
+    per column (commit 5928bf7f76cc:benchmarks/archive/search_step.py times the whole step).
     """
     return vectors[..., 0] * vectors[..., 0] + vectors[..., 1] * vectors[..., 1]
 

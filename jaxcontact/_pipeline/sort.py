@@ -23,7 +23,7 @@ def stable_order(keys: Array, num_values: int) -> Array:
     same one-operand sort of ``digit * E + place so far``, stable, so the
     passes compose): two passes over 100,000 node indices took 4.0 against
     7.9 ms for ``argsort``, and over 900,000 cell entries 39.7 against 95.0 ms
-    (measured on both cores with tag benchmarks-archive-1.2:benchmarks/archive/sorts.py).
+    (measured on both cores with commit 5928bf7f76cc:benchmarks/archive/sorts.py).
     """
     size = keys.shape[0]
     if size <= 1:

@@ -62,7 +62,7 @@ class Swept(Query):
     uses_radius = False
     # The exhaustive swept search's rows come in whole vectors: with XLA's
     # CPU fusion emitters it ran 3x slower on 81,937 or 81,939 rows than
-    # padded to 81,944 (measured with tag benchmarks-archive-1.2:benchmarks/archive/row_counts.py).
+    # padded to 81,944 (measured with commit 5928bf7f76cc:benchmarks/archive/row_counts.py).
     row_multiple = 8
 
     def check(self, points, surface, radius, mask):

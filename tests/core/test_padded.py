@@ -1,7 +1,7 @@
 """Plain exhaustive calls pad to size classes: a long process compiles few programs.
 
 Each program XLA compiles maps hundreds of memory regions into the process
-(1.2's benchmarks/archive/long_process.py, at git tag benchmarks-archive-1.2);
+(1.2's benchmarks/archive/long_process.py, in commit 5928bf7f76cc);
 plain calls of ``all_to_all`` and ``swept`` at many shapes must share programs.
 The one-call bucket forms are a ``Search`` allocated per call: they pad
 nothing and keep nothing between calls.

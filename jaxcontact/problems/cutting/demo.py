@@ -1,7 +1,7 @@
 """``jaxcontact demo`` (``--scene cutting``, the default): the orthogonal cut, run and drawn.
 
-Runs ``cutting.run`` with a progress bar on stderr, prints the
-summary (``cutting.summary``) as a table and writes it to
+Runs ``cutting.run`` with a progress bar on stderr (whole lines when stderr is not a
+terminal), prints the summary (``cutting.summary``) as a table and writes it to
 ``OUT/summary.json``. With matplotlib installed (the ``bench`` extra) it
 also draws ``OUT/chip.png`` (the chip at the end, by plastic strain and by
 temperature), ``OUT/forces.png`` (the forces against the travel, beside
@@ -55,6 +55,7 @@ CURL = {
 }
 FRAMES = 40  # the run in this many calls, a frame after each: the GIF's frames
 _BAR = 30  # characters of the progress bar
+_LINES = 10  # off a terminal, the progress as a whole line each tenth of the run
 _EDGES = (0.15, 0.15, 0.15, 0.5)  # the elements' edges: dark grey, half transparent
 _CAPTION = 165  # characters a line of the forces figure's caption (8 pt across 11 inches)
 
@@ -230,10 +231,15 @@ def make_cut(args: argparse.Namespace) -> cutting.Cutting:
 
 
 class _Progress:
-    """A text progress bar on stderr, redrawn in place (``\\r``)."""
+    """A text progress bar on stderr: on a terminal redrawn in place (``\\r``); off one (a
+    log file, a pipe) written as whole lines, one each tenth of the run, since a log would
+    keep every redraw on one long line."""
 
     def __init__(self, stream=None):
         self.stream = sys.stderr if stream is None else stream
+        isatty = getattr(self.stream, "isatty", None)
+        self.in_place = bool(isatty is not None and isatty())
+        self.tenths = -1  # off a terminal: the last tenth of the run written
         self.started = time.perf_counter()
         self.calls: list[tuple[int, float]] = []  # (steps done, when)
 
@@ -245,12 +251,21 @@ class _Progress:
         filled = round(share * _BAR)
         elapsed = now - self.started
         note = "  (compiling)" if done == 0 else ""
-        self.stream.write(
-            f"\r[{'#' * filled}{'.' * (_BAR - filled)}] {share:4.0%}  "
-            f"{done}/{total} steps  {elapsed:.0f} s{note}   "
+        line = (
+            f"[{'#' * filled}{'.' * (_BAR - filled)}] {share:4.0%}  "
+            f"{done}/{total} steps  {elapsed:.0f} s{note}"
         )
-        if done >= total:
-            self.stream.write("\n")
+        if self.in_place:
+            self.stream.write(f"\r{line}   ")
+            if done >= total:
+                self.stream.write("\n")
+        else:
+            # Integer tenths: a share such as 0.7 must not round below its tenth.
+            tenths = _LINES * min(done, total) // total if total else _LINES
+            if tenths <= self.tenths:
+                return
+            self.tenths = tenths
+            self.stream.write(line + "\n")
         self.stream.flush()
 
     def rate(self) -> float:
