@@ -27,4 +27,11 @@ from jaxcontact.sim import explicit as explicit
 from jaxcontact.sim import materials as materials
 from jaxcontact.sim import static as static
 from jaxcontact.sim import tools as tools
-from jaxcontact.sim._removed import __getattr__ as __getattr__
+from jaxcontact._removed import listing as _listing
+from jaxcontact._removed import missing as _missing
+
+__all__ = ["ale", "coupling", "elements", "explicit", "materials", "static", "tools"]
+
+# Old names fail naming their replacements (jaxcontact._removed); dir() lists the public ones.
+__getattr__ = _missing(__name__)
+__dir__ = _listing(__name__)

@@ -22,7 +22,8 @@ from typing import NamedTuple
 import jax.numpy as jnp
 from jax import Array
 
-from jaxcontact.sim import _removed, materials
+from jaxcontact import _removed
+from jaxcontact.sim import materials
 from jaxcontact.sim.elements import q4
 
 
@@ -99,7 +100,7 @@ def step(
       The new ``Body`` and the step's plastic strain increments (f[E, 4]).
     """
     if removed:
-        _removed.refuse("explicit.step", removed)
+        _removed.refuse(f"{__name__}.step", removed)
     if boundary is None:
         boundary = Boundary()
     elif not isinstance(boundary, Boundary):

@@ -13,6 +13,7 @@ import math
 import numpy as np
 from jax import Array
 
+from jaxcontact import _removed
 from jaxcontact.sim import ale, materials, tools
 
 CLEARANCE_DEG = 7.0
@@ -169,9 +170,7 @@ class Cutting:
 
     def __getattr__(self, name: str):
         # Only for names the class does not have: a removed one says what replaces it.
-        from jaxcontact.problems.cutting._removed import missing
-
-        raise missing(name, "Cutting")
+        raise _removed.attribute_error("jaxcontact.problems.cutting.Cutting", name)
 
     @property
     def tool(self) -> tools.Tool:
