@@ -20,6 +20,8 @@ The problems set up from them live in ``jaxcontact.problems`` (``cutting``,
 has raises an ``AttributeError`` that names its replacement.
 """
 
+from jaxcontact._removed import listing as _listing
+from jaxcontact._removed import missing as _missing
 from jaxcontact.sim import ale as ale
 from jaxcontact.sim import coupling as coupling
 from jaxcontact.sim import elements as elements
@@ -27,8 +29,6 @@ from jaxcontact.sim import explicit as explicit
 from jaxcontact.sim import materials as materials
 from jaxcontact.sim import static as static
 from jaxcontact.sim import tools as tools
-from jaxcontact._removed import listing as _listing
-from jaxcontact._removed import missing as _missing
 
 __all__ = ["ale", "coupling", "elements", "explicit", "materials", "static", "tools"]
 

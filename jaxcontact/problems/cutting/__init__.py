@@ -64,7 +64,6 @@ from jaxcontact.problems.cutting.report import (
     summary,
 )
 
-
 # Old names fail naming their replacements (jaxcontact._removed).
 __getattr__ = _removed.missing(__name__)
 
