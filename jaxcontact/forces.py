@@ -5,8 +5,12 @@ Every function takes the result of a search (a ``Contact``, or a
 each slave, and its reaction on the master's nodes, shared between the two
 end nodes of the segment touched by the linear basis ``(1 - xi, xi)``. The
 two sum to zero (action and reaction), and a deformable master gets nodal
-forces to assemble. Units are the caller's: a stiffness in force per length
-(per unit thickness in plane strain, N/mm per mm, say) times a gap in length.
+forces to assemble. This module is the way to compute contact forces;
+``jaxcontact.sim.coupling.friction_forces`` is ``coulomb`` behind the
+simulation parts' friction laws (a coefficient set per node from the normal
+force), a part for an explicit run built from them. Units are the caller's:
+a stiffness in force per length (per unit thickness in plane strain, N/mm
+per mm, say) times a gap in length.
 
 **Normal penalty.** An active slave (``gap < 0``) is pushed out along the
 contact normal with ``f_n = stiffness * (-gap)``. A node-to-segment penalty
