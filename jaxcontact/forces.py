@@ -69,9 +69,12 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxcontact._pipeline.placement import replicated
+from jaxcontact._removed import listing as _listing
 from jaxcontact._removed import missing as _missing
 from jaxcontact._track import Slip
 from jaxcontact._types import Array, Contact, ContactList, Surface
+
+__all__ = ["Forces", "Friction", "coulomb", "penalty"]
 
 
 class Forces(NamedTuple):
@@ -395,4 +398,6 @@ def coulomb(
     return forces, after
 
 
+# Old names fail naming their replacements (jaxcontact._removed); dir() lists the public ones.
 __getattr__ = _missing(__name__)
+__dir__ = _listing(__name__)

@@ -33,6 +33,8 @@ from jax import Array
 from jaxcontact import Contact, Slip, Surface
 from jaxcontact.forces import Forces, Friction, coulomb, penalty
 
+__all__ = ["Coulomb", "Guarded", "Zorev", "friction_forces", "guard", "mass_penalty", "own_forces"]
+
 
 def mass_penalty(mass: Array, dt, factor: float) -> Array:
     """f[N]: each node's penalty stiffness ``factor m_i / dt²`` (N/mm per mm of thickness)."""

@@ -26,6 +26,8 @@ from jaxcontact import _removed
 from jaxcontact.sim import materials
 from jaxcontact.sim.elements import q4
 
+__all__ = ["Body", "Boundary", "at_rest", "stable_dt", "step"]
+
 
 class Body(NamedTuple):
     """A deforming body's state between steps."""

@@ -16,6 +16,20 @@ from jax import Array
 from jaxcontact import _removed
 from jaxcontact.sim import ale, materials, tools
 
+__all__ = [
+    "ARC_SEGMENTS",
+    "CLEARANCE_DEG",
+    "Cutting",
+    "FLANK",
+    "LANDING",
+    "MU",
+    "PENMAX",
+    "TOOL_NODES",
+    "VISCOSITY",
+    "cutting_tool",
+    "tool_outline",
+]
+
 CLEARANCE_DEG = 7.0
 MU = 0.3  # Coulomb's coefficient on the tool by default
 # Bulk viscosity (linear, quadratic): LS-DYNA's default linear coefficient;
