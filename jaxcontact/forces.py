@@ -89,6 +89,9 @@ class Friction(NamedTuple):
 
     Start with ``Friction.zeros(N)``. ``traction`` is the state;
     ``stuck`` and ``dissipated`` describe the step that produced it.
+    ``coulomb`` returns it in the wider of its own float dtype and the
+    slaves', so a ``lax.scan`` carries one dtype from ``Friction.zeros(N)``
+    (JAX's default float) or from ``Friction.zeros(N, x.dtype)``.
     """
 
     traction: Array  # f[N, 2]  tangential force on each slave at the last step, world coordinates
@@ -99,9 +102,10 @@ class Friction(NamedTuple):
     def zeros(num_slaves: int, dtype=None) -> Friction:
         """No history: nothing in contact yet.
 
-        ``dtype`` None is JAX's default float (float64 with ``jax_enable_x64``),
-        so a ``lax.scan`` carry matches the forces of a run in that precision;
-        pass the slaves' dtype (``x.dtype``) where it is another.
+        ``dtype`` None is JAX's default float (float64 with ``jax_enable_x64``).
+        A narrower one than the slaves' (float32 for float64 slaves) makes
+        ``coulomb`` return a wider state than it was given, which a
+        ``lax.scan`` carry refuses: leave it None, or pass ``x.dtype``.
         """
         return Friction(
             jnp.zeros((num_slaves, 2), dtype),
@@ -390,10 +394,14 @@ def coulomb(
         base = jnp.full((num_slaves,) + values.shape[1:], empty, values.dtype)
         return base.at[row].set(values, mode="drop")
 
+    # The state keeps the wider of its own float and the slaves': a scan's
+    # carry keeps its dtype whether it started from Friction.zeros(N) (JAX's
+    # default float) or in the slaves' dtype, and no precision is dropped.
+    kept = jnp.promote_types(dtype, friction.traction.dtype)
     after = Friction(
-        traction=spread(jnp.where(active[:, None], traction, 0), 0),
+        traction=spread(jnp.where(active[:, None], traction, 0).astype(kept), 0),
         stuck=spread(active & stuck, False),
-        dissipated=spread(dissipated, 0),
+        dissipated=spread(dissipated.astype(kept), 0),
     )
     return forces, after
 

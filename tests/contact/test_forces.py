@@ -358,13 +358,14 @@ def test_penalty_refuses_a_negative_stiffness_it_can_see():
     assert float(pulled.on_slaves[0, 1]) < 0
 
 
-def test_friction_zeros_follows_the_default_float_in_a_scan():
+@pytest.mark.parametrize("dtype", [FLOAT, np.float32])
+def test_friction_zeros_follows_the_default_float_in_a_scan(dtype):
     assert Friction.zeros(3).traction.dtype == jnp.zeros(()).dtype == FLOAT
     assert Friction.zeros(3).dissipated.dtype == FLOAT
     assert Friction.zeros(3, jnp.float32).traction.dtype == jnp.float32
-    floor = Surface(jnp.array([[1.0, 0.0], [0.0, 0.0]], FLOAT), jnp.array([[0, 1]]))
+    floor = Surface(jnp.array([[1.0, 0.0], [0.0, 0.0]], dtype), jnp.array([[0, 1]]))
     search = Search(radius=0.1, method="exhaustive", track=True)
-    x0 = jnp.array([[0.25, -0.01]], FLOAT)
+    x0 = jnp.array([[0.25, -0.01]], dtype)
 
     def step(carry, shift):
         state, friction = carry
@@ -374,10 +375,12 @@ def test_friction_zeros_follows_the_default_float_in_a_scan():
         )
         return (state, friction), forces.on_slaves
 
-    # The carry's dtype must not change over the scan (x64 on: float64 throughout).
+    # The carry's dtype must not change over the scan: the state stays in the default
+    # float (float64 with x64, float32 slaves too); the forces are in the slaves' dtype.
     start = (search.allocate(x0, floor), Friction.zeros(1))
-    (_, friction), on_slaves = jax.lax.scan(step, start, jnp.array([0.0, 0.001, 0.002], FLOAT))
-    assert on_slaves.dtype == friction.traction.dtype == FLOAT
+    (_, friction), on_slaves = jax.lax.scan(step, start, jnp.array([0.0, 0.001, 0.002], dtype))
+    assert on_slaves.dtype == dtype
+    assert friction.traction.dtype == friction.dissipated.dtype == FLOAT
     assert float(friction.traction[0, 0]) < 0  # it opposes the slide along +x
 
 
