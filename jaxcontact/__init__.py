@@ -7,7 +7,7 @@ from jaxcontact._detect import bucket_sort as bucket_sort
 from jaxcontact._detect import bucket_swept as bucket_swept
 from jaxcontact._detect import swept as swept
 from jaxcontact._normals import Smooth as Smooth
-from jaxcontact._pipeline.pairs import Pairs as Pairs
+from jaxcontact._pairs import Pairs as Pairs
 from jaxcontact._removed import missing as _missing
 from jaxcontact._resume import check_overflow as check_overflow
 from jaxcontact._resume import resumable_scan as resumable_scan

@@ -5,8 +5,12 @@ Every function takes the result of a search (a ``Contact``, or a
 each slave, and its reaction on the master's nodes, shared between the two
 end nodes of the segment touched by the linear basis ``(1 - xi, xi)``. The
 two sum to zero (action and reaction), and a deformable master gets nodal
-forces to assemble. Units are the caller's: a stiffness in force per length
-(per unit thickness in plane strain, N/mm per mm, say) times a gap in length.
+forces to assemble. This module is the way to compute contact forces;
+``jaxcontact.sim.coupling.friction_forces`` is ``coulomb`` behind the
+simulation parts' friction laws (a coefficient set per node from the normal
+force), a part for an explicit run built from them. Units are the caller's:
+a stiffness in force per length (per unit thickness in plane strain, N/mm
+per mm, say) times a gap in length.
 
 **Normal penalty.** An active slave (``gap < 0``) is pushed out along the
 contact normal with ``f_n = stiffness * (-gap)``. A node-to-segment penalty
@@ -57,6 +61,7 @@ penalty lets slaves penetrate by ``f_n / stiffness``.
 from __future__ import annotations
 
 import functools
+import inspect
 from typing import NamedTuple
 
 import jax
@@ -64,9 +69,12 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxcontact._pipeline.placement import replicated
+from jaxcontact._removed import listing as _listing
 from jaxcontact._removed import missing as _missing
 from jaxcontact._track import Slip
 from jaxcontact._types import Array, Contact, ContactList, Surface
+
+__all__ = ["Forces", "Friction", "coulomb", "penalty"]
 
 
 class Forces(NamedTuple):
@@ -79,8 +87,11 @@ class Forces(NamedTuple):
 class Friction(NamedTuple):
     """What Coulomb friction carries from step to step (a pytree for ``lax.scan``).
 
-    Start with ``Friction.zeros(N, dtype)``. ``traction`` is the state;
+    Start with ``Friction.zeros(N)``. ``traction`` is the state;
     ``stuck`` and ``dissipated`` describe the step that produced it.
+    ``coulomb`` returns it in the wider of its own float dtype and the
+    slaves', so a ``lax.scan`` carries one dtype from ``Friction.zeros(N)``
+    (JAX's default float) or from ``Friction.zeros(N, x.dtype)``.
     """
 
     traction: Array  # f[N, 2]  tangential force on each slave at the last step, world coordinates
@@ -88,8 +99,14 @@ class Friction(NamedTuple):
     dissipated: Array  # f[N]  energy dissipated by sliding in the step: mu f_n |s_p| >= 0
 
     @staticmethod
-    def zeros(num_slaves: int, dtype=jnp.float32) -> Friction:
-        """No history: nothing in contact yet."""
+    def zeros(num_slaves: int, dtype=None) -> Friction:
+        """No history: nothing in contact yet.
+
+        ``dtype`` None is JAX's default float (float64 with ``jax_enable_x64``).
+        A narrower one than the slaves' (float32 for float64 slaves) makes
+        ``coulomb`` return a wider state than it was given, which a
+        ``lax.scan`` carry refuses: leave it None, or pass ``x.dtype``.
+        """
         return Friction(
             jnp.zeros((num_slaves, 2), dtype),
             jnp.zeros((num_slaves,), bool),
@@ -170,6 +187,38 @@ def _weight(two_pass: bool) -> float:
     return 0.5 if two_pass else 1.0
 
 
+def _non_negative(name: str, value, strictly: bool = False):
+    """A ``ValueError`` naming it when ``value`` is concrete and negative (zero, ``strictly``)."""
+    if any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree.leaves(value)):
+        return
+    values = np.asarray(value)
+    bad = values <= 0 if strictly else values < 0
+    if values.size and bool(np.any(bad | ~np.isfinite(values))):
+        bound = "> 0" if strictly else ">= 0"
+        raise ValueError(f"{name} must be finite and {bound}; got {value!r}")
+
+
+def _signed(**strictly: bool):
+    """Wraps a jitted force function: before the call, each argument named in
+    ``strictly`` is checked by ``_non_negative`` (> 0 where True, >= 0 where
+    False). Outside ``jit``: a traced value has no sign to check."""
+
+    def wrap(jitted):
+        signature = inspect.signature(jitted)
+
+        @functools.wraps(jitted)
+        def checked(*args, **kwargs):
+            arguments = signature.bind(*args, **kwargs).arguments
+            for name, strict in strictly.items():
+                _non_negative(name, arguments[name], strict)
+            return jitted(*args, **kwargs)
+
+        return checked
+
+    return wrap
+
+
+@_signed(stiffness=False)
 @functools.partial(jax.jit, static_argnames=("num_slaves", "two_pass", "axis_name"))
 def penalty(
     contact: Contact | ContactList,
@@ -185,7 +234,10 @@ def penalty(
     Args:
       contact: a ``Contact``, or a ``ContactList`` with ``num_slaves``.
       surface: the master the contact was found on (its node indices place the reaction).
-      stiffness: force per unit penetration, a scalar or f[N] per slave.
+      stiffness: force per unit penetration, a scalar or f[N] per slave,
+        finite and >= 0 (a negative one would pull the slaves in). A
+        ``ValueError`` names it when it is concrete; a traced value (under
+        the caller's ``jit``, ``grad`` or ``vmap``) cannot be checked.
       num_slaves: N, for a ``ContactList``.
       two_pass: weight each force by 1/2 (both bodies searched as slaves
         and masters in one call; see the module's notes).
@@ -209,8 +261,9 @@ def penalty(
       >>> (forces.on_slaves + 0.0).tolist(), (forces.on_master + 0.0).tolist()  # no -0.0
       ([[0.0, 5.0]], [[0.0, -1.25], [0.0, -3.75]])
     """
-    # A result split over explicit mesh axes (``sharded``) is gathered: the
-    # reaction's scatter onto the master's nodes has no rule for split rows.
+    # A result split over explicit mesh axes (arrays sharded with jax.sharding)
+    # is gathered: the reaction's scatter onto the master's nodes has no rule
+    # for split rows.
     contact, surface, stiffness = replicated((contact, surface, stiffness))
     entries, num_slaves = _entries(contact, num_slaves)
     dtype = entries.gap.dtype
@@ -223,17 +276,34 @@ def penalty(
     return forces
 
 
-def _non_negative(name: str, value, strictly: bool = False):
-    """A ``ValueError`` naming it when ``value`` is concrete and negative (zero, ``strictly``)."""
-    if any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree.leaves(value)):
-        return
-    values = np.asarray(value)
-    bad = values <= 0 if strictly else values < 0
-    if values.size and bool(np.any(bad | ~np.isfinite(values))):
-        bound = "> 0" if strictly else ">= 0"
-        raise ValueError(f"{name} must be finite and {bound}; got {value!r}")
+def _check_history(contact, slip, friction) -> None:
+    """``coulomb``'s slip and friction: of their types, and of the contact's slaves."""
+    if slip is None:
+        raise ValueError(
+            "slip is None: coulomb needs the slip history, state.slip of a "
+            "jaxcontact.Search(track=True) (a Search without track=True keeps none), "
+            "or jaxcontact.track(last, contact, surface)"
+        )
+    if not isinstance(slip, Slip):
+        raise ValueError(
+            "slip must be a jaxcontact.Slip (state.slip of a Search(track=True)); "
+            f"got {type(slip).__name__}"
+        )
+    if not isinstance(friction, Friction):
+        raise ValueError(
+            "friction must be a jaxcontact.forces.Friction (Friction.zeros(N) at the start); "
+            f"got {type(friction).__name__}"
+        )
+    num_slaves = slip.slip.shape[0]
+    if isinstance(contact, Contact) and contact.gap.shape[0] != num_slaves:
+        raise ValueError(
+            f"contact has {contact.gap.shape[0]} rows; slip has {num_slaves}: "
+            "they must be of the same slaves"
+        )
 
 
+@_signed(stiffness=False, tangent_stiffness=True, mu=False)
+@functools.partial(jax.jit, static_argnames="two_pass")
 def coulomb(
     contact: Contact | ContactList,
     slip: Slip,
@@ -247,16 +317,26 @@ def coulomb(
 ) -> tuple[Forces, Friction]:
     """Normal penalty and Coulomb friction forces of one step, and the friction state after it.
 
+    The way to compute contact forces with friction. (The simulation parts'
+    ``jaxcontact.sim.coupling.friction_forces`` is this function behind a
+    friction law, Coulomb's or Zorev's, that sets ``mu`` per node from the
+    normal force.) A ``ValueError`` names a coefficient out of range when it
+    is concrete; a traced value (under the caller's ``jit``, ``grad`` or
+    ``vmap``) cannot be checked.
+
     Args:
       contact: this step's ``Contact`` or ``ContactList`` (from a
-        ``Search(track=True)``, or any detector with ``track``).
-      slip: the ``Slip`` of this step (``Search(track=True).closest``'s third
-        result, or ``jaxcontact.track``).
+        ``Search(track=True)``, or any detector and ``jaxcontact.track``).
+      slip: the ``Slip`` of this step: ``state.slip`` of the state that
+        ``Search(track=True).closest`` returned with ``contact``, or
+        ``jaxcontact.track(last, contact, surface)`` after a detector. A
+        ``Search`` without ``track=True`` keeps no slip (``state.slip`` is
+        None): a ``ValueError`` says so.
       friction: the ``Friction`` of the last step (``Friction.zeros(N)`` at the start).
       surface: the master now.
-      stiffness: normal penalty stiffness, scalar or f[N] (>= 0).
-      tangent_stiffness: the stick spring's stiffness, scalar or f[N] (> 0).
-      mu: the Coulomb coefficient, scalar or f[N] (>= 0).
+      stiffness: normal penalty stiffness, scalar or f[N] (finite, >= 0).
+      tangent_stiffness: the stick spring's stiffness, scalar or f[N] (finite, > 0).
+      mu: the Coulomb coefficient, scalar or f[N] (finite, >= 0).
       two_pass: weight both forces by 1/2 (see the module's notes). The
         friction state holds the unweighted traction.
 
@@ -264,40 +344,7 @@ def coulomb(
       ``(forces, friction)``: normal plus tangential ``Forces``, and the
       ``Friction`` to pass to the next step.
     """
-    _non_negative("stiffness", stiffness)
-    _non_negative("tangent_stiffness", tangent_stiffness, strictly=True)
-    _non_negative("mu", mu)
-    num_slaves = slip.slip.shape[0]
-    if isinstance(contact, Contact) and contact.gap.shape[0] != num_slaves:
-        raise ValueError(
-            f"contact has {contact.gap.shape[0]} rows; slip has {num_slaves}: "
-            "they must be of the same slaves"
-        )
-    return _coulomb(
-        contact,
-        slip,
-        friction,
-        surface,
-        stiffness=stiffness,
-        tangent_stiffness=tangent_stiffness,
-        mu=mu,
-        two_pass=two_pass,
-    )
-
-
-@functools.partial(jax.jit, static_argnames="two_pass")
-def _coulomb(
-    contact: Contact | ContactList,
-    slip: Slip,
-    friction: Friction,
-    surface: Surface,
-    *,
-    stiffness,
-    tangent_stiffness,
-    mu,
-    two_pass: bool = False,
-) -> tuple[Forces, Friction]:
-    """``coulomb`` under ``jit``, its values checked."""
+    _check_history(contact, slip, friction)
     num_slaves = slip.slip.shape[0]
     if friction.traction.shape[:1] != (num_slaves,):
         raise ValueError(
@@ -347,12 +394,18 @@ def _coulomb(
         base = jnp.full((num_slaves,) + values.shape[1:], empty, values.dtype)
         return base.at[row].set(values, mode="drop")
 
+    # The state keeps the wider of its own float and the slaves': a scan's
+    # carry keeps its dtype whether it started from Friction.zeros(N) (JAX's
+    # default float) or in the slaves' dtype, and no precision is dropped.
+    kept = jnp.promote_types(dtype, friction.traction.dtype)
     after = Friction(
-        traction=spread(jnp.where(active[:, None], traction, 0), 0),
+        traction=spread(jnp.where(active[:, None], traction, 0).astype(kept), 0),
         stuck=spread(active & stuck, False),
-        dissipated=spread(dissipated, 0),
+        dissipated=spread(dissipated.astype(kept), 0),
     )
     return forces, after
 
 
+# Old names fail naming their replacements (jaxcontact._removed); dir() lists the public ones.
 __getattr__ = _missing(__name__)
+__dir__ = _listing(__name__)

@@ -19,7 +19,23 @@ from typing import NamedTuple
 import jax.numpy as jnp
 import numpy as np
 
+from jaxcontact._removed import listing as _listing
 from jaxcontact._types import Array, Surface
+
+__all__ = [
+    "BodiesScene",
+    "Scene",
+    "corner_outline",
+    "curling_chip",
+    "cutting_scene",
+    "cutting_tool_outline",
+    "folded_u",
+    "grid",
+    "paper_scene",
+    "paper_tool",
+    "rough_die_scene",
+    "two_blocks",
+]
 
 
 class Scene(NamedTuple):
@@ -477,3 +493,7 @@ def two_blocks(n: int = 10, *, overlap: float = 0.05, dtype=jnp.float32) -> Bodi
     segments = np.concatenate([_loop(4 * n), _loop(4 * n, 4 * n)])
     radius = max(2 * overlap, 1 / n)
     return _bodies_scene(nodes, segments, node_body, radius, np.maximum(inside, 0.0), dtype)
+
+
+# dir() lists the public names (numpy, jnp and the helpers stay out of it).
+__dir__ = _listing(__name__)

@@ -103,3 +103,87 @@ def test_the_public_names_are_found():
     # Every name of __all__ but the two public modules, documented by their own pages.
     assert set(names) == set(jaxcontact.__all__) - {"forces", "scenes"}
     assert len(names) == 20
+
+
+# -- __all__ on every public module -------------------------------------------------------
+
+
+def public_modules() -> list[str]:
+    """The package and every module under it with no underscored part in its name."""
+    import pkgutil
+
+    import jaxcontact
+
+    return ["jaxcontact"] + [
+        found.name
+        for found in pkgutil.walk_packages(jaxcontact.__path__, "jaxcontact.")
+        if not any(part.startswith("_") for part in found.name.split("."))
+    ]
+
+
+def all_problems(module: types.ModuleType) -> list[str]:
+    """What is wrong with ``module.__all__``: missing, a name that does not resolve, a
+    public function or class the module defines (or a package re-exports) left out, a
+    name ``dir`` does not show."""
+    name = module.__name__
+    listed = getattr(module, "__all__", None)
+    if not isinstance(listed, list | tuple) or not all(isinstance(n, str) for n in listed):
+        return [f"{name} has no __all__ of names"]
+    problems = [f"{name}.__all__ lists {n!r} twice" for n in set(listed) if listed.count(n) > 1]
+    package = hasattr(module, "__path__")
+    for entry in listed:
+        # A package's submodule resolves whether or not it was imported yet.
+        submodule = package and importlib.util.find_spec(f"{name}.{entry}") is not None
+        if not (hasattr(module, entry) or submodule):
+            problems.append(f"{name}.__all__ lists {entry!r}, which does not resolve")
+    for entry, value in vars(module).items():
+        if entry.startswith("_") or isinstance(value, types.ModuleType) or entry in listed:
+            continue
+        own = callable(value) and getattr(value, "__module__", None) == name
+        if own or (package and getattr(value, "__module__", "").startswith("jaxcontact")):
+            problems.append(f"{name}.{entry} is public but not in __all__")
+    unseen = set(listed) - set(dir(module))
+    if unseen:
+        problems.append(f"dir({name}) does not show {sorted(unseen)}")
+    return problems
+
+
+def test_every_public_module_has_an_all_of_its_public_names():
+    modules = public_modules()
+    # The walk finds the modules the issue names (an empty walk would pass the loop).
+    assert {"jaxcontact.forces", "jaxcontact.scenes", "jaxcontact.sim.coupling"} <= set(modules)
+    assert {"jaxcontact.problems.cutting.model", "jaxcontact.problems.hertz.theory"} <= set(modules)
+    assert not any("._" in module for module in modules)
+    problems = [p for module in modules for p in all_problems(importlib.import_module(module))]
+    assert not problems, problems
+
+
+def test_dir_of_forces_and_scenes_shows_their_public_names_only():
+    import jaxcontact.forces
+    import jaxcontact.scenes
+
+    for module in (jaxcontact.forces, jaxcontact.scenes):
+        assert dir(module) == sorted(module.__all__)
+    assert {"coulomb", "penalty", "Friction", "Forces"} == set(dir(jaxcontact.forces))
+
+
+def test_the_all_check_finds_what_is_wrong():
+    # all_problems on modules made wrong on purpose: each fault is named.
+    bare = types.ModuleType("jaxcontact_fake")
+    assert all_problems(bare) == ["jaxcontact_fake has no __all__ of names"]
+
+    def helper():
+        pass
+
+    helper.__module__ = "jaxcontact_fake"
+    fake = types.ModuleType("jaxcontact_fake")
+    fake.__all__ = ["gone", "kept", "kept"]
+    fake.kept = 1.0
+    fake.helper = helper
+    fake._private = helper
+    found = all_problems(fake)
+    assert "jaxcontact_fake.__all__ lists 'kept' twice" in found
+    assert "jaxcontact_fake.__all__ lists 'gone', which does not resolve" in found
+    assert "jaxcontact_fake.helper is public but not in __all__" in found
+    assert "dir(jaxcontact_fake) does not show ['gone']" in found
+    assert len(found) == 4

@@ -15,8 +15,11 @@ pass through untouched, so the program is the one they always compiled to.
 Arrays on *auto* axes carry no sharding in their types: the compiler
 partitions the unchanged program and places its results itself.
 
-``sharded(detector, mesh)`` (``_shard``) is the other way: it splits the
-search itself, each device searching its own rows.
+The other way is the caller's: ``jax.shard_map`` over a detector or a
+``Search`` step splits the search itself, each device searching its own
+slaves' rows against the whole master (docs/guides/devices.md), and
+``forces.penalty(axis_name=...)`` sums the master's reaction over the
+devices there.
 """
 
 from __future__ import annotations

@@ -10,3 +10,5 @@ Each has one shape: its config class (frozen numbers), ``setup(config)``,
 Nothing is imported here: ``import jaxcontact.problems.cutting`` loads one
 problem, and no part of ``jaxcontact.sim`` imports any.
 """
+
+__all__ = ["cutting", "hertz", "ploughing"]

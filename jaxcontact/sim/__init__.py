@@ -20,6 +20,8 @@ The problems set up from them live in ``jaxcontact.problems`` (``cutting``,
 has raises an ``AttributeError`` that names its replacement.
 """
 
+from jaxcontact._removed import listing as _listing
+from jaxcontact._removed import missing as _missing
 from jaxcontact.sim import ale as ale
 from jaxcontact.sim import coupling as coupling
 from jaxcontact.sim import elements as elements
@@ -27,4 +29,9 @@ from jaxcontact.sim import explicit as explicit
 from jaxcontact.sim import materials as materials
 from jaxcontact.sim import static as static
 from jaxcontact.sim import tools as tools
-from jaxcontact.sim._removed import __getattr__ as __getattr__
+
+__all__ = ["ale", "coupling", "elements", "explicit", "materials", "static", "tools"]
+
+# Old names fail naming their replacements (jaxcontact._removed); dir() lists the public ones.
+__getattr__ = _missing(__name__)
+__dir__ = _listing(__name__)

@@ -66,6 +66,22 @@ from jax import Array
 from jaxcontact.sim import materials
 from jaxcontact.sim.elements import q4
 
+__all__ = [
+    "GUARD_HALVINGS",
+    "NEWTON",
+    "Settings",
+    "Tables",
+    "areas",
+    "cycles",
+    "quality",
+    "remap",
+    "remap_points",
+    "remap_velocity",
+    "rezone",
+    "swept",
+    "tables",
+]
+
 
 class Tables(NamedTuple):
     """A Q4 mesh's neighbours, built once on the host by ``tables``."""

@@ -10,7 +10,9 @@ Three choices every explicit contact code makes, each an option here:
   factor below about 1.
 * **The friction law** (``Coulomb`` or ``Zorev``), turned into a
   coefficient per node and handed to ``jaxcontact.forces.coulomb`` with the
-  slip history.
+  slip history (``friction_forces``). ``forces.coulomb`` is the way to
+  compute friction forces; ``friction_forces`` is the simulation parts' use
+  of it, for a law whose coefficient depends on the normal force.
 * **The penetration guards** of a body against its own outline
   (``guard``): a contact at an open end of the outline (a crack tip: the
   node's closest point is that end, and which side it lies on is
@@ -30,6 +32,8 @@ from jax import Array
 
 from jaxcontact import Contact, Slip, Surface
 from jaxcontact.forces import Forces, Friction, coulomb, penalty
+
+__all__ = ["Coulomb", "Guarded", "Zorev", "friction_forces", "guard", "mass_penalty", "own_forces"]
 
 
 def mass_penalty(mass: Array, dt, factor: float) -> Array:
@@ -85,8 +89,30 @@ def friction_forces(
     stiffness: Array,
     law: Coulomb | Zorev,
 ) -> tuple[Forces, Friction]:
-    """The penalty and the friction of ``law`` on a tracked contact: ``forces.coulomb``
-    with the law's coefficient per node, the stick spring as stiff as the normal one."""
+    """The penalty and the friction of ``law`` on a tracked contact, for an explicit run
+    built from these parts.
+
+    A part for one job: a friction law whose coefficient depends on each
+    node's normal force (``Zorev``'s sticking limit), with the stick spring
+    as stiff as the normal one (the mass penalty's ``stiffness``, so both
+    stay within the explicit step's stability). It is
+    ``jaxcontact.forces.coulomb(contact, slip, friction, surface,
+    stiffness=stiffness, tangent_stiffness=stiffness, mu=law.coefficient(f_n))``
+    with ``f_n = stiffness * -gap`` on active rows. For Coulomb friction with
+    a fixed coefficient, or a stick stiffness of your own, call
+    ``forces.coulomb``, the documented way (docs/guides/friction.md).
+
+    Args:
+      contact: this step's ``Contact`` (N rows), from a ``Search(track=True)``.
+      slip: ``state.slip`` of that search's state.
+      friction: the last step's ``Friction`` (``Friction.zeros(N)`` at the start).
+      surface: the master now.
+      stiffness: the normal and stick stiffness, f[N] (``mass_penalty``) or a scalar.
+      law: ``Coulomb`` or ``Zorev``.
+
+    Returns:
+      ``(forces, friction)``, as ``forces.coulomb`` returns them.
+    """
     normal = jnp.where(contact.active, stiffness * -contact.gap, 0)
     mu = law.coefficient(normal)
     return coulomb(

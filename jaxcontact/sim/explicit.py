@@ -22,8 +22,11 @@ from typing import NamedTuple
 import jax.numpy as jnp
 from jax import Array
 
-from jaxcontact.sim import _removed, materials
+from jaxcontact import _removed
+from jaxcontact.sim import materials
 from jaxcontact.sim.elements import q4
+
+__all__ = ["Body", "Boundary", "at_rest", "stable_dt", "step"]
 
 
 class Body(NamedTuple):
@@ -99,7 +102,7 @@ def step(
       The new ``Body`` and the step's plastic strain increments (f[E, 4]).
     """
     if removed:
-        _removed.refuse("explicit.step", removed)
+        _removed.refuse(f"{__name__}.step", removed)
     if boundary is None:
         boundary = Boundary()
     elif not isinstance(boundary, Boundary):

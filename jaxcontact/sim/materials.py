@@ -37,6 +37,24 @@ import jax
 import jax.numpy as jnp
 from jax import Array
 
+__all__ = [
+    "AISI_1045",
+    "AISI_4340",
+    "BISECTIONS",
+    "Elastic",
+    "JohnsonCook",
+    "Material",
+    "OFHC_COPPER",
+    "PointState",
+    "ROOM",
+    "STEEL",
+    "deviator",
+    "hooke",
+    "inertial_density",
+    "von_mises",
+    "wave_speed",
+]
+
 ROOM = 25.0 + 273.15  # K
 # Halvings of the return mapping's bracket [0, q_trial / 3G]: past float64's
 # resolution (half of them in float32).

@@ -31,6 +31,8 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
+__all__ = ["Energy", "Newton", "minimize"]
+
 
 @dataclasses.dataclass(frozen=True)
 class Newton:

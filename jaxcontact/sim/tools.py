@@ -32,6 +32,8 @@ from jax import Array
 
 from jaxcontact import Surface
 
+__all__ = ["Tool", "outline", "rings", "surface"]
+
 
 @dataclasses.dataclass(frozen=True)
 class Tool:

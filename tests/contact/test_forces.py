@@ -328,6 +328,62 @@ def test_bad_force_inputs_are_named():
         track(entries, entries, floor)
 
 
+def test_coulomb_without_a_tracked_search_names_track_true():
+    floor = Surface(jnp.array([[1.0, 0.0], [0.0, 0.0]], FLOAT), jnp.array([[0, 1]]))
+    x = jnp.array([[0.25, -0.05]], FLOAT)
+    search = Search(radius=0.1, method="exhaustive")  # no track=True: no slip kept
+    contact, state = search.closest(search.allocate(x, floor), x, floor)
+    assert state.slip is None
+    keywords = dict(stiffness=1.0, tangent_stiffness=1.0, mu=0.1)
+    with pytest.raises(ValueError, match=r"slip is None: .*Search\(track=True\)"):
+        coulomb(contact, state.slip, Friction.zeros(1), floor, **keywords)
+    with pytest.raises(ValueError, match="slip must be a jaxcontact.Slip .* got SearchState"):
+        coulomb(contact, state, Friction.zeros(1), floor, **keywords)
+    slip = track(contact, contact, floor)
+    with pytest.raises(ValueError, match=r"friction must be a .*zeros\(N\).* got NoneType"):
+        coulomb(contact, slip, None, floor, **keywords)
+
+
+def test_penalty_refuses_a_negative_stiffness_it_can_see():
+    floor = Surface(jnp.array([[1.0, 0.0], [0.0, 0.0]], FLOAT), jnp.array([[0, 1]]))
+    x = jnp.array([[0.25, -0.5], [0.75, -0.25]], FLOAT)
+    contact = all_to_all(x, floor, radius=1.0)
+    for stiffness in (-10.0, np.array([10.0, -1.0]), float("nan")):
+        with pytest.raises(ValueError, match=r"stiffness must be finite and >= 0; got"):
+            penalty(contact, floor, stiffness)
+    pushed = penalty(contact, floor, np.array([10.0, 0.0]))  # zero is allowed: no force
+    np.testing.assert_array_equal(np.asarray(pushed.on_slaves[:, 1]), [5.0, 0.0])
+    # Traced, its sign is not known when the program is built: the docstring says so.
+    pulled = jax.jit(lambda k: penalty(contact, floor, k))(-10.0)
+    assert float(pulled.on_slaves[0, 1]) < 0
+
+
+@pytest.mark.parametrize("dtype", [FLOAT, np.float32])
+def test_friction_zeros_follows_the_default_float_in_a_scan(dtype):
+    assert Friction.zeros(3).traction.dtype == jnp.zeros(()).dtype == FLOAT
+    assert Friction.zeros(3).dissipated.dtype == FLOAT
+    assert Friction.zeros(3, jnp.float32).traction.dtype == jnp.float32
+    floor = Surface(jnp.array([[1.0, 0.0], [0.0, 0.0]], dtype), jnp.array([[0, 1]]))
+    search = Search(radius=0.1, method="exhaustive", track=True)
+    x0 = jnp.array([[0.25, -0.01]], dtype)
+
+    def step(carry, shift):
+        state, friction = carry
+        contact, state = search.closest(state, x0.at[0, 0].add(shift), floor)
+        forces, friction = coulomb(
+            contact, state.slip, friction, floor, stiffness=100.0, tangent_stiffness=100.0, mu=0.5
+        )
+        return (state, friction), forces.on_slaves
+
+    # The carry's dtype must not change over the scan: the state stays in the default
+    # float (float64 with x64, float32 slaves too); the forces are in the slaves' dtype.
+    start = (search.allocate(x0, floor), Friction.zeros(1))
+    (_, friction), on_slaves = jax.lax.scan(step, start, jnp.array([0.0, 0.001, 0.002], dtype))
+    assert on_slaves.dtype == dtype
+    assert friction.traction.dtype == friction.dissipated.dtype == FLOAT
+    assert float(friction.traction[0, 0]) < 0  # it opposes the slide along +x
+
+
 def test_compact_and_dense_searches_give_the_same_frictional_forces_under_vmap():
     """Search(track=True, normals=Smooth()) + coulomb: the dense Contact (two
     scenes under vmap) and the compact ContactList (scene by scene, with the

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 import jaxcontact
+from jaxcontact.problems.cutting import Cutting
 from jaxcontact.sim import coupling, explicit, materials, tools
 from jaxcontact.sim.elements import q4
 from tests.support.tolerances import CLOSED_FORM_RTOL, FLOAT32_ATOL, FLOAT32_RTOL, FLOAT64_RTOL
@@ -149,14 +150,30 @@ def test_mass_scaling_slows_the_waves_and_leaves_the_heating_alone():
     np.testing.assert_array_equal(np.asarray(hot.temperature), np.asarray(cold.temperature))
 
 
-def _removed_cases():
-    from jaxcontact.problems.cutting import _removed as cutting_removed
-    from jaxcontact.sim import _removed as sim_removed
+PACKAGES = ("jaxcontact.sim", "jaxcontact.problems.cutting")
 
-    return [("jaxcontact.sim", name, entry) for name, entry in sim_removed.REMOVED.items()] + [
-        ("jaxcontact.problems.cutting", name, entry)
-        for name, entry in cutting_removed.REMOVED.items()
+
+def _removed_cases():
+    from jaxcontact import _removed
+
+    return [
+        (package, old[len(package) + 1 :], entry)
+        for old, entry in _removed.REMOVED.items()
+        for package in PACKAGES
+        if old.startswith(f"{package}.")
     ]
+
+
+def test_the_removed_cases_are_every_kind_of_the_two_packages():
+    # The parametrisation below is over the table: an emptied table would pass it.
+    names = {f"{package}.{name}" for package, name, _ in _removed_cases()}
+    assert len(names) == 29
+    assert {
+        "jaxcontact.sim.cutting",
+        "jaxcontact.sim.explicit.step(fixed=)",
+        "jaxcontact.problems.cutting.STEEL",
+        "jaxcontact.problems.cutting.Cutting.material",
+    } <= names
 
 
 @pytest.mark.parametrize(("package", "name", "entry"), _removed_cases(), ids=lambda v: str(v))
@@ -165,7 +182,8 @@ def test_every_removed_name_raises_naming_its_replacement(package, name, entry):
 
     replacement, deprecated, removed = entry
     assert (deprecated, removed) in (("1.2", "2.0"), ("2.0", "2.0"))
-    expected = f"{package}.{name} was removed in 2.0: use {replacement}"
+    assert replacement.startswith("use ")
+    expected = f"{package}.{name} was removed in 2.0: {replacement}"
     module = importlib.import_module(package)
     if "(" in name:  # a keyword a function no longer takes
         function, keyword = name[:-2].split("(")
@@ -189,7 +207,9 @@ def test_a_fixed_array_where_the_boundary_goes_is_refused():
 def test_an_unknown_name_is_an_ordinary_attribute_error():
     import jaxcontact.sim as sim
 
-    with pytest.raises(AttributeError, match="has no attribute 'nothing'"):
+    with pytest.raises(AttributeError, match="module 'jaxcontact.sim' has no attribute 'nothing'"):
         sim.nothing  # noqa: B018
+    with pytest.raises(AttributeError, match="'Cutting' object has no attribute 'nothing'"):
+        Cutting().nothing  # noqa: B018
     with pytest.raises(TypeError, match="unexpected keyword argument 'nothing'"):
         explicit.step(None, None, None, None, None, nothing=1)

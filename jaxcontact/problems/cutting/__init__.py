@@ -10,7 +10,7 @@ model and why it is so. A name the cut no longer has raises an
 ``AttributeError`` that names its replacement.
 """
 
-from jaxcontact.problems.cutting import _removed
+from jaxcontact import _removed
 from jaxcontact.problems.cutting.config import (
     ARC_SEGMENTS,
     CLEARANCE_DEG,
@@ -64,9 +64,8 @@ from jaxcontact.problems.cutting.report import (
     summary,
 )
 
-
-def __getattr__(name: str):
-    raise _removed.missing(name)
+# Old names fail naming their replacements (jaxcontact._removed).
+__getattr__ = _removed.missing(__name__)
 
 
 __all__ = [

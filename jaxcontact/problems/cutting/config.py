@@ -13,7 +13,22 @@ import math
 import numpy as np
 from jax import Array
 
+from jaxcontact import _removed
 from jaxcontact.sim import ale, materials, tools
+
+__all__ = [
+    "ARC_SEGMENTS",
+    "CLEARANCE_DEG",
+    "Cutting",
+    "FLANK",
+    "LANDING",
+    "MU",
+    "PENMAX",
+    "TOOL_NODES",
+    "VISCOSITY",
+    "cutting_tool",
+    "tool_outline",
+]
 
 CLEARANCE_DEG = 7.0
 MU = 0.3  # Coulomb's coefficient on the tool by default
@@ -169,9 +184,7 @@ class Cutting:
 
     def __getattr__(self, name: str):
         # Only for names the class does not have: a removed one says what replaces it.
-        from jaxcontact.problems.cutting._removed import missing
-
-        raise missing(name, "Cutting")
+        raise _removed.attribute_error("jaxcontact.problems.cutting.Cutting", name)
 
     @property
     def tool(self) -> tools.Tool:

@@ -37,6 +37,26 @@ import numpy as np
 from jaxcontact.problems import cutting
 from jaxcontact.problems.cutting import machining
 
+__all__ = [
+    "CURL",
+    "FRAMES",
+    "RAKE_LIMIT",
+    "TRAVEL",
+    "add_arguments",
+    "check",
+    "demo_keys",
+    "dips_note",
+    "draw_chip",
+    "draw_forces",
+    "draw_gif",
+    "element_size",
+    "main",
+    "make_cut",
+    "positive",
+    "print_table",
+    "window_note",
+]
+
 _DEFAULT = cutting.Cutting()  # the default cut: the options' defaults are its numbers
 TRAVEL = _DEFAULT.travel  # mm, the default tool travel
 RAKE_LIMIT = 30.0  # degrees either way

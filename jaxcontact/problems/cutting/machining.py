@@ -41,6 +41,22 @@ import numpy as np
 
 from jaxcontact.sim.materials import AISI_1045, JohnsonCook
 
+__all__ = [
+    "AISI_1045_THERMAL",
+    "DELTA_RANGE",
+    "KIENZLE_CK45",
+    "Oxley",
+    "SHEAR_ANGLE_RANGE",
+    "STRAIN_RATE_CONSTANT_RANGE",
+    "Thermal",
+    "friction_angle_from_forces",
+    "kienzle_force",
+    "merchant_forces",
+    "merchant_shear_angle",
+    "oxley",
+    "shear_angle_from_chip",
+]
+
 KIENZLE_CK45 = (2220.0, 0.14)  # (k_c1.1 in N/mm², m_c), König and Klocke
 
 

@@ -131,6 +131,32 @@ from jaxcontact.problems.cutting.config import (
 from jaxcontact.sim import ale, coupling, explicit, materials, tools
 from jaxcontact.sim.elements import q4
 
+__all__ = [
+    "Frame",
+    "Model",
+    "Record",
+    "State",
+    "Workpiece",
+    "advance",
+    "chunk_steps",
+    "contacts",
+    "friction_law",
+    "held",
+    "mean_forces",
+    "own_surface",
+    "rezone",
+    "run",
+    "setup",
+    "step",
+    "sticking_limit",
+    "tool_friction",
+    "tool_position",
+    "tool_surface",
+    "tool_travel",
+    "travel_at",
+    "workpiece",
+]
+
 
 class Workpiece(NamedTuple):
     """The workpiece's mesh with everything a cutting run needs of it (static shapes)."""

@@ -27,6 +27,19 @@ from jaxcontact.problems.cutting.model import (
 )
 from jaxcontact.sim import materials
 
+__all__ = [
+    "Dips",
+    "LAST",
+    "SMALL_FLOOR",
+    "STEADY_DRIFT",
+    "Window",
+    "chip_thickness",
+    "deepest_in_tool",
+    "release_dips",
+    "steady_window",
+    "summary",
+]
+
 # The steady state of the forces: a criterion defined here, not taken from a
 # source. A window of the run's last steps is steady when the least-squares
 # line through each force component (raw, every step) changes across the

@@ -9,6 +9,8 @@ from typing import NamedTuple
 
 import numpy as np
 
+__all__ = ["FINE", "Indentation", "MESHES", "MOST_WIDTH", "NOMINAL", "SEGMENTS_PER_ELEMENT", "SPAN"]
+
 # The uniform zone of the mesh, about the contact: |x| <= FINE a, y >= -FINE a.
 FINE = 1.5
 # The cylinder's arc, the master, covers |x| <= SPAN a: the gap grows as x²/2R

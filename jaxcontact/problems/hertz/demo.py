@@ -18,6 +18,8 @@ from jaxcontact.problems._output import write_png
 from jaxcontact.problems.hertz.config import Indentation
 from jaxcontact.problems.hertz.model import Solver, run
 
+__all__ = ["ACROSS", "draw", "main"]
+
 ACROSS = 24  # the demo's mesh: elements across the contact width 2a
 
 

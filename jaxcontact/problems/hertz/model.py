@@ -101,6 +101,18 @@ from jaxcontact.sim import static
 from jaxcontact.sim.elements.triangle import Mesh, strain_energy, triangle_mesh
 from jaxcontact.sim.materials import Elastic
 
+__all__ = [
+    "Block",
+    "Equilibrium",
+    "Result",
+    "Solver",
+    "equilibrium",
+    "fit_half_width",
+    "peak_pressure",
+    "run",
+    "setup",
+]
+
 
 class Block(NamedTuple):
     """The block's mesh and its top surface (a pytree of arrays; T top nodes, M segments)."""

@@ -11,6 +11,8 @@ import numpy as np
 
 from jaxcontact.problems.hertz.config import Indentation, _check
 
+__all__ = ["Hertz", "hertz"]
+
 
 class Hertz(NamedTuple):
     """Hertz's line contact of a rigid cylinder on an elastic half-space."""

@@ -11,6 +11,8 @@ import dataclasses
 from jaxcontact.sim import tools
 from jaxcontact.sim.materials import STEEL, Elastic
 
+__all__ = ["MASS_SCALED_STEEL", "Ploughing", "SCENE_TOOL", "TIP_HEIGHT"]
+
 MASS_SCALED_STEEL = STEEL._replace(mass_scale=1e4)
 """Steel with its density scaled by 10^4: the default workpiece (``model``'s docstring says why)."""
 

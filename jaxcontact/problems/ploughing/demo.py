@@ -26,6 +26,8 @@ from jaxcontact.problems.ploughing.config import Ploughing
 from jaxcontact.problems.ploughing.model import History, scan, setup, simulate, tool_surface
 from jaxcontact.sim.elements.triangle import stresses, von_mises
 
+__all__ = ["Summary", "TRAVEL", "add_arguments", "main", "run_demo"]
+
 
 class Summary(NamedTuple):
     """What the demo measured (all plain Python numbers)."""

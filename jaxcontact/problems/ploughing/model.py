@@ -55,6 +55,22 @@ from jaxcontact.sim import tools
 from jaxcontact.sim.elements.triangle import Mesh, internal_forces, smallest_altitude, triangle_mesh
 from jaxcontact.sim.materials import Elastic, inertial_density
 
+__all__ = [
+    "Controls",
+    "Final",
+    "History",
+    "Plan",
+    "Run",
+    "mean_cutting_force",
+    "run",
+    "scan",
+    "setup",
+    "simulate",
+    "tool_outline",
+    "tool_surface",
+    "workpiece_mesh",
+]
+
 
 @jax.jit
 def tool_outline(x_tip, rake) -> Array:

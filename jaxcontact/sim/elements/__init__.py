@@ -3,3 +3,5 @@ explicit runs) and ``triangle`` (small strain, linear elastic)."""
 
 from jaxcontact.sim.elements import q4 as q4
 from jaxcontact.sim.elements import triangle as triangle
+
+__all__ = ["q4", "triangle"]

@@ -37,6 +37,20 @@ from jax import Array
 
 from jaxcontact.sim import materials
 
+__all__ = [
+    "CORNERS",
+    "DSHAPE",
+    "GAUSS",
+    "Quads",
+    "bulk_viscosity",
+    "distortion",
+    "grid_mesh",
+    "internal_forces",
+    "rotate",
+    "step_material",
+    "strain_and_spin",
+]
+
 _G = 1 / np.sqrt(3.0)
 GAUSS = np.array([[-_G, -_G], [_G, -_G], [_G, _G], [-_G, _G]])  # weights 1 each
 CORNERS = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])

@@ -25,6 +25,16 @@ from jax import Array
 from jaxcontact.sim.materials import Elastic, inertial_density
 from jaxcontact.sim.materials import von_mises as _von_mises
 
+__all__ = [
+    "Mesh",
+    "internal_forces",
+    "smallest_altitude",
+    "strain_energy",
+    "stresses",
+    "triangle_mesh",
+    "von_mises",
+]
+
 
 class Mesh(NamedTuple):
     """A triangle mesh with what its elements need precomputed. E elements, N nodes."""
