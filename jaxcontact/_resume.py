@@ -14,6 +14,8 @@ the result is what one scan at large enough sizes returns.
 
 from __future__ import annotations
 
+import warnings
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -141,10 +143,14 @@ def resumable_scan(step, carry, xs=None, *, chunk: int, grow, length: int | None
       ValueError: when ``carry`` already holds an overflowed state, when
         ``grow`` returns one, or on a bad ``chunk``.
       RuntimeError: when ``grow`` returned sizes no larger than those a
-        chunk overflowed with (it would overflow again), when a chunk still
-        overflows after ``grow`` ran 8 times in a row on it, or when a chunk
-        lost a contact (``SearchState.lost``: no sizes mend that; the radius
-        must grow).
+        chunk overflowed with (it would overflow again), or when a chunk
+        still overflows after ``grow`` ran 8 times in a row on it.
+
+    Warns:
+      UserWarning: when a chunk lost a contact (``SearchState.lost``: a
+        slave passed through the master deeper than the radius reaches). No
+        sizes mend that: the radius must grow. The count stays in the state,
+        and ``check_overflow`` raises on it.
     """
     if isinstance(chunk, bool) or not isinstance(chunk, int) or chunk < 1:
         raise ValueError(f"chunk must be an int >= 1; got {chunk!r}")
@@ -189,8 +195,13 @@ def resumable_scan(step, carry, xs=None, *, chunk: int, grow, length: int | None
                 raise RuntimeError(f"the chunk from step {first} still overflows after 8 regrowths")
         lost = _lost(after) - _lost(carry)
         if lost > 0:
-            raise RuntimeError(
-                f"the chunk from step {first} lost {lost} contact(s): {_RAISE_THE_RADIUS}"
+            # No sizes mend a loss, and a run of prescribed motion may mean it: warned,
+            # and kept in the state for check_overflow.
+            warnings.warn(
+                f"resumable_scan: the chunk from step {first} lost {lost} contact(s): "
+                f"{_RAISE_THE_RADIUS}",
+                UserWarning,
+                stacklevel=2,
             )
         carry = after
         outputs.append(ys)
