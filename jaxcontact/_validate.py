@@ -150,7 +150,7 @@ def validate(x, surface: Surface, *, radius=None, mask=None, x_prev=None, pairs=
             UserWarning,
             stacklevel=2,
         )
-    pairs = _pairs.check(pairs, x, surface, mask)
+    pairs = _pairs.check(pairs, x, surface._replace(nodes=nodes, segments=segments), mask)
     reversed_open = reversed_chains(
         x, nodes, segments, real_segments, real, body=surface.body, pairs=pairs, radius=radius
     )
