@@ -170,7 +170,11 @@ class Search:
 
     Attributes:
       radius: the closest-point search radius (``closest``); ``None`` for a
-        search of paths only.
+        search of paths only. A penetrating slave lies ``-gap`` from its
+        segment, so the radius must exceed the deepest penetration expected
+        in one step: a slave that goes deeper is found nowhere, and its
+        contact is lost (``SearchState.lost``). ``allocate`` refuses 0, which
+        finds no penetration at all.
       skin: ``0`` (the default) keeps no candidates: every ``closest`` runs
         the whole bucket sort with the allocated sizes. Above 0, candidates
         are found within ``radius + skin`` and reused until the largest
@@ -312,10 +316,17 @@ class Search:
           A ``SearchState``. Its sizes are static: each distinct sizes
           compiles ``closest`` (``swept``) once.
 
+        Raises:
+          ValueError: for a radius of 0 (it finds no penetrating slave), and
+            for bad inputs, naming the argument.
+
         Warns:
           UserWarning: when no slave (path) comes within ``radius + skin`` of
             the box of the master's real segments: the sizes then hold no
-            contact, and a later step that comes into contact overflows.
+            contact, and a later step that comes into contact overflows. And
+            (with a radius) when an open chain of the master faces away from
+            the slaves near it, by ``validate``'s rule: a floor listed left
+            to right under a body, whose normals point into the floor.
         """
         return self._allocate(x, surface, x_prev, mask, at_least, pool, pairs, warn=True)
 
