@@ -23,7 +23,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxcontact import _normals, _removed, _track
+from jaxcontact import _normals, _removed, _track, _validate
 from jaxcontact._pipeline import candidates as _candidates
 from jaxcontact._pipeline import driver
 from jaxcontact._pipeline import inputs as _inputs
@@ -54,7 +54,16 @@ METHODS = ("auto", "binned", "unbinned", "exhaustive")
 
 @functools.partial(
     jax.tree_util.register_dataclass,
-    data_fields=["candidates", "overflow", "rebuilds", "last_rebuild", "history", "slip"],
+    data_fields=[
+        "candidates",
+        "overflow",
+        "rebuilds",
+        "last_rebuild",
+        "lost",
+        "last_active",
+        "history",
+        "slip",
+    ],
     meta_fields=["sizes", "reach"],
 )
 @dataclasses.dataclass(frozen=True)
@@ -82,6 +91,16 @@ class SearchState:
         more than the skin, 2 a slave row became real, 4 a segment outside
         the pool became real, 8 a real segment was joined to other nodes;
         0 before the first rebuild.
+      lost: i32[] how many contacts were lost since ``allocate``: a slave
+        active at one ``closest`` step that the next finds nowhere, lying
+        behind the segment it touched (within that segment's span), deeper
+        than the radius can see. A penetrating slave lies ``|gap|`` from its
+        segment, so a penetration deeper than the radius in one step (a fast
+        impact) loses the contact, and the body passes through; raise the
+        radius (``check_overflow`` raises, saying so). It only grows.
+      last_active: i32[N] the segment each slave was active on at the last
+        ``closest`` step, -1 where none (``None`` for a search of paths
+        only): what ``lost`` is measured against.
       reach: ``radius + skin`` of the search that allocated it (static):
         a search that reaches farther refuses the state.
       history: last step's contact of every slave (the N-row form, for the
@@ -95,6 +114,8 @@ class SearchState:
     overflow: Array
     rebuilds: Array
     last_rebuild: Array
+    lost: Array
+    last_active: Array | None = None
     reach: float | None = None
     history: _track.History | None = None
     slip: Slip | None = None
@@ -149,7 +170,11 @@ class Search:
 
     Attributes:
       radius: the closest-point search radius (``closest``); ``None`` for a
-        search of paths only.
+        search of paths only. A penetrating slave lies ``-gap`` from its
+        segment, so the radius must exceed the deepest penetration expected
+        in one step: a slave that goes deeper is found nowhere, and its
+        contact is lost (``SearchState.lost``). ``allocate`` refuses 0, which
+        finds no penetration at all.
       skin: ``0`` (the default) keeps no candidates: every ``closest`` runs
         the whole bucket sort with the allocated sizes. Above 0, candidates
         are found within ``radius + skin`` and reused until the largest
@@ -291,17 +316,30 @@ class Search:
           A ``SearchState``. Its sizes are static: each distinct sizes
           compiles ``closest`` (``swept``) once.
 
+        Raises:
+          ValueError: for a radius of 0 (it finds no penetrating slave), and
+            for bad inputs, naming the argument.
+
         Warns:
           UserWarning: when no slave (path) comes within ``radius + skin`` of
             the box of the master's real segments: the sizes then hold no
-            contact, and a later step that comes into contact overflows.
+            contact, and a later step that comes into contact overflows. And
+            (with a radius) when an open chain of the master faces away from
+            the slaves near it, by ``validate``'s rule: a floor listed left
+            to right under a body, whose normals point into the floor.
         """
         return self._allocate(x, surface, x_prev, mask, at_least, pool, pairs, warn=True)
 
     def _allocate(
         self, x, surface, x_prev=None, mask=None, at_least=None, pool=None, pairs=None, *, warn
     ) -> SearchState:
-        """``allocate``, warning (``warn``) where no slave comes near the master."""
+        """``allocate``, warning (``warn``) where no slave comes near the master or an
+        open chain of it faces away from them, and refusing a radius of 0."""
+        if warn and self.radius == 0:
+            raise ValueError(
+                f"Search(radius=0) cannot serve a closest-point search: {_validate.ZERO_RADIUS}; "
+                "a Search(radius=None) searches paths only (swept)"
+            )
         if self.radius is None and x_prev is None:
             raise ValueError("allocate needs x_prev= for a Search without a radius (paths only)")
         # Paths first: a bad x_prev is named before the x it shares its checks with.
@@ -348,6 +386,8 @@ class Search:
                 points = max(queries.values(), key=len)
                 x_prev = points[0] if len(points) > 1 else None
                 _warn_if_none_near(points[-1], pooled, mask, reach, x_prev)
+        if warn and self.radius is not None:
+            _warn_if_reversed(queries[CLOSEST][-1], surface, mask, pairing, self.radius)
         x = next(iter(queries.values()))[-1]
         state = self._state(QuerySizes(sizes), candidates, overflow, batch, x)
         return _kept_history(state, at_least)
@@ -419,7 +459,9 @@ class Search:
         return self._state(sizes, candidates, overflow, (), x)
 
     def _state(self, sizes, candidates, overflow, batch, x) -> SearchState:
-        history = slip = None
+        history = slip = last_active = None
+        if self.radius is not None:
+            last_active = jnp.full(batch + x.shape[-2:-1], -1, jnp.int32)
         if self.track:
             history = _track.empty_history(x.shape[-2], x.dtype, batch)
             slip = _track.no_slip(x.shape[-2], x.dtype, batch)
@@ -431,6 +473,8 @@ class Search:
             overflow=overflow,
             rebuilds=jnp.zeros(batch, jnp.int32),
             last_rebuild=jnp.zeros(batch, jnp.int32),
+            lost=jnp.zeros(batch, jnp.int32),
+            last_active=last_active,
             reach=None if self.radius is None else self._reach,
         )
 
@@ -531,11 +575,11 @@ class Search:
             )
         if self.method == "exhaustive":
             contact = driver.exhaustive(CLOSEST, (x,), surface, radius, mask, pairing)
-            return self._finish(contact, state, x, surface)
+            return self._finish(contact, state, x, surface, mask)
         self._sizes_of(CLOSEST, state, x)
         self._check_state(state, x, surface)
         contact, state = _closest(self, state, x, surface, mask, radius, pairing)
-        return self._finish(contact, state, x, surface)
+        return self._finish(contact, state, x, surface, mask)
 
     def _sizes_of(self, query, state: SearchState, x) -> Sizes:
         """The state's sizes for ``query``, checked against ``x`` and this search's form."""
@@ -552,10 +596,14 @@ class Search:
             )
         return sizes
 
-    def _finish(self, contact, state: SearchState, x, surface: Surface):
-        """Smooth normals and the slip history, where this search asks for them."""
+    def _finish(self, contact, state: SearchState, x, surface: Surface, mask):
+        """Smooth normals and the slip history, where this search asks for them, and
+        the contacts lost since the last step."""
         if self.normals is not None:
             contact = _normals.smoothed_jit(contact, x, surface, self.normals.corner)
+        if state.last_active is not None:
+            last_active, lost = _losses(state.last_active, contact, x, surface, mask)
+            state = dataclasses.replace(state, last_active=last_active, lost=state.lost + lost)
         if not self.track:
             return contact, state
         history = _track.history_of(contact, x.shape[0])
@@ -682,8 +730,15 @@ def _axis(values):
 
 
 def _kept_history(state: SearchState, at_least) -> SearchState:
-    """``state`` with ``at_least``'s slip history, where both track the same rows."""
-    old = at_least.history if isinstance(at_least, SearchState) else None
+    """``state`` with ``at_least``'s slip history and last active contacts (a loss
+    across a regrowth is still seen), where both track the same rows."""
+    if not isinstance(at_least, SearchState):
+        return state
+    old_active = at_least.last_active
+    if state.last_active is not None and old_active is not None:
+        if jnp.shape(old_active) == jnp.shape(state.last_active):
+            state = dataclasses.replace(state, last_active=old_active)
+    old = at_least.history
     if state.history is None or old is None:
         return state
     if jax.tree.map(jnp.shape, old) != jax.tree.map(jnp.shape, state.history):
@@ -740,6 +795,37 @@ def _warn_if_none_near(x, surface: Surface, mask, reach, x_prev) -> None:
     )
 
 
+def _warn_if_reversed(x, surface: Surface, mask, pairs: Pairs, radius: float) -> None:
+    """A ``UserWarning`` for each open chain of the master whose normals face away from
+    the slaves near it (``validate``'s rule, ``_validate.reversed_chains``), in any scene
+    of a batch (``x`` f[B, N, 2]; one warning per chain)."""
+    x = np.asarray(x)
+    scenes = [()] if x.ndim == 2 else [(b,) for b in range(x.shape[0])]
+    messages = []
+
+    def scene(values, at, ndim):
+        return values if values is None or np.ndim(values) == ndim else np.asarray(values)[at]
+
+    for at in scenes:
+        own = Surface(*(scene(v, at, n) for v, n in zip(surface, (2, 2, 1, 1), strict=True)))
+        rows = scene(mask, at, 1)
+        rows = np.ones(x.shape[-2], bool) if rows is None else np.asarray(rows, bool)
+        segments = np.asarray(own.segments)
+        real = np.ones(len(segments), bool) if own.mask is None else np.asarray(own.mask, bool)
+        rule = Pairs(
+            scene(pairs.slave_node, at, 1),
+            scene(pairs.slave_body, at, 1),
+            pairs.self_contact,
+            pairs.allow,
+        )
+        found = _validate.reversed_chains(
+            x[at], own.nodes, segments, real, rows, body=own.body, pairs=rule, radius=radius
+        )
+        messages += [message for message in found if message not in messages]
+    for message in messages:
+        warnings.warn(f"Search.allocate: {message}", UserWarning, stacklevel=4)
+
+
 def _near(x, surface: Surface, mask, reach, x_prev) -> bool:
     """Whether a real slave (path) of one scene comes within ``reach`` of the box of the
     real segments (True where there is nothing to test: no real slave or segment)."""
@@ -758,6 +844,43 @@ def _near(x, surface: Surface, mask, reach, x_prev) -> bool:
     margin = 0.0 if reach is None else float(reach)
     near = np.all((high >= ends.min(axis=0) - margin) & (low <= ends.max(axis=0) + margin), -1)
     return bool(near.any())
+
+
+@jax.jit
+def _losses(last_active, contact, x, surface: Surface, mask):
+    """``(active, lost)``: i32[N] the segment each slave is active on now (-1 where
+    none), and i32[] how many slaves active at the last step (on ``last_active``) are
+    found nowhere now while lying behind that segment, within its span: deeper than the
+    radius reaches (``SearchState.lost``). One gather and one sum over the N rows; a
+    step that overflowed counts none (its missing contacts are the overflow's)."""
+    num_rows = x.shape[0]
+    if isinstance(contact, ContactList):
+        rows = jnp.where(contact.found, contact.node, num_rows)
+        found = jnp.zeros(num_rows, bool).at[rows].set(True, mode="drop")
+        on = jnp.where(contact.active, contact.segment, -1)
+        active = jnp.full(num_rows, -1, jnp.int32).at[rows].set(on, mode="drop")
+    else:
+        found = contact.found
+        active = jnp.where(contact.active, contact.segment, -1).astype(jnp.int32)
+    num_segments, num_nodes = surface.segments.shape[0], surface.nodes.shape[0]
+    if num_segments == 0 or num_nodes == 0:
+        return active, jnp.zeros((), jnp.int32)
+    segment = jnp.clip(last_active, 0, num_segments - 1)
+    ends = surface.segments[segment]
+    real = (last_active >= 0) & jnp.all((ends >= 0) & (ends < num_nodes), axis=-1)
+    if surface.mask is not None:
+        real &= surface.mask[segment]
+    start = surface.nodes[jnp.clip(ends[:, 0], 0, num_nodes - 1)]
+    step = surface.nodes[jnp.clip(ends[:, 1], 0, num_nodes - 1)] - start
+    # Only flags leave here: no gradient flows through the test.
+    rel = jax.lax.stop_gradient(x - start)
+    step = jax.lax.stop_gradient(step)
+    along = jnp.sum(rel * step, axis=-1)
+    within = (along >= 0) & (along <= jnp.sum(step * step, axis=-1))
+    behind = rel[:, 0] * step[:, 1] - rel[:, 1] * step[:, 0] < 0
+    lost = real & ~found & within & behind & _segments.rows_ok(x, mask)
+    count = jnp.where(contact.overflow, 0, jnp.sum(lost, dtype=jnp.int32))
+    return active, count
 
 
 def _check_state_type(state):

@@ -397,8 +397,9 @@ def test_a_radius_past_the_search_bound_says_so_unless_no_row_is_real():
 
 
 def _floor_and_chain(height: float):
-    """A wavy floor of 40 segments and a chain of 200 slaves at ``height`` above it."""
-    along = np.linspace(-1.0, 1.0, 41)
+    """A wavy floor of 40 segments (listed right to left: normals up) and a chain of 200
+    slaves at ``height`` above it."""
+    along = np.linspace(1.0, -1.0, 41)
     nodes = np.stack([along, 0.05 * np.sin(5 * along)], -1).astype(FLOAT)
     floor = Surface(jnp.asarray(nodes), jnp.stack([jnp.arange(40), jnp.arange(1, 41)], -1))
     chain = np.stack([np.linspace(-0.9, 0.9, 200), np.full(200, height)], -1).astype(FLOAT)
