@@ -184,7 +184,7 @@ class Search:
         reads every row to check the rule, carries the candidates in the
         state, and searches the longer lists of the wider reach; a step that
         finds them again costs more than one without a skin. Whether it pays
-        depends on the scene: tag benchmarks-archive-1.2:benchmarks/archive/search_step.py
+        depends on the scene: commit 5928bf7f76cc:benchmarks/archive/search_step.py
         (one step) and benchmarks/simulations.py (a ``lax.scan``) measure it.
       method: ``"binned"``: bucket sort with the segments binned in cells,
         each kept slave against its cell's segments; ``"unbinned"``: bucket
