@@ -24,7 +24,7 @@ from jaxcontact._types import Sizes as Sizes
 from jaxcontact._types import Surface as Surface
 from jaxcontact._validate import validate as validate
 
-__version__ = "2.1.0"
+__version__ = "2.2.0"
 
 __all__ = [
     "Contact",
