@@ -260,10 +260,10 @@ def reversed_chains(
     no closed loop: a floor, a wall, a tool's face. Each real slave (a sample of 16
     to ``SIDE_SAMPLE``, fewer on a longer master) is given its closest real segment of
     the whole master, at any distance, among the segments the pair rule lets it meet;
-    it counts for that
-    segment's chain where its side of the segment's line is decided: always when its
-    closest point lies inside the segment, and past an end only when it lies farther
-    across the line than past the end (above a vertex, not beside a free end). The
+    it counts for that segment's chain where its side of the segment's line is decided:
+    always when its closest point lies inside the segment, and past an end only when it
+    lies farther across the line than past the end (above a vertex, not beside a free
+    end). The
     chain is reported when more of its slaves lie behind it (negative gap) deeper than
     ``radius`` than lie in front of it. The slaves in contact with a master penetrate it
     by less than the radius, or the search would not see them: they never count against
