@@ -160,7 +160,7 @@ class Cutting:
                         breaker=self.breaker,
                     )
                 )  # fmt: skip
-                flank_end, wall_end, land_end = corners[-3:]
+                flank_end, wall_end, land_end = corners[-4:-1]
                 a, b = wall_end - flank_end, land_end - flank_end
                 if a[0] * b[1] - a[1] * b[0] <= 0:
                     raise ValueError(
@@ -253,8 +253,12 @@ def tool_outline(
 
 def cutting_tool(edge_radius: float, rake_face: float, breaker=None) -> tools.Tool:
     """The cut's ``tools.Tool``: a 7° clearance, a flank of 0.3 mm, the edge drawn by
-    ``ARC_SEGMENTS`` segments."""
-    return tools.Tool(edge_radius, CLEARANCE_DEG, rake_face, FLANK, ARC_SEGMENTS, breaker)
+    ``ARC_SEGMENTS`` segments, each face split one arc chord from the edge
+    (``tools.Tool.split_faces``: the cut's contact normals are smooth, and
+    the pressure on the flat rake face makes no thrust)."""
+    return tools.Tool(
+        edge_radius, CLEARANCE_DEG, rake_face, FLANK, ARC_SEGMENTS, breaker, split_faces=True
+    )
 
 
-TOOL_NODES = ARC_SEGMENTS + 4
+TOOL_NODES = ARC_SEGMENTS + 6
