@@ -68,7 +68,9 @@ class Cutting:
       erode: the Jacobian ratio below which an element is eroded.
       shear_factor: Zorev's sticking limit ``m`` (``coupling.Zorev``): the
         friction stress in sticking is ``m k``, ``k`` the shear flow stress
-        that ``friction_limit`` names.
+        that ``friction_limit`` names; a traction, each node carrying it over
+        its tributary length (``model.contact_share``). The default, half of
+        AISI 1045's ``A / sqrt 3``, is 160 MPa.
       friction_limit: which shear flow stress ``k``: ``"flow"``, the chip's
         own, ``sigma_JC(eps_p, rate, T) / sqrt 3`` of the elements at each node
         (Oxley's sticking takes ``m = 1``); ``"initial"``, the material's
