@@ -60,6 +60,9 @@ each mesh over Hertz's, and the errors against the element size.
     python benchmarks/simulations.py --ale            # about 8 min: the ALE chip root and the
                                                       # chip's own friction limit against
                                                       # Extended Oxley, a table on stdout
+    python benchmarks/simulations.py --diagnostics    # about 7 min: the rake face term by
+                                                      # term at D, C and A (--diagnostics D:
+                                                      # one condition), a table on stdout
 
 ``--ale`` runs only ``ALE_RUNS`` (issue 51's checks, not yet part of the stored record): each
 an orthogonal cut on the default mesh, 0.8 mm of travel, mu = 0.3, the Lagrangian default
@@ -68,11 +71,25 @@ cap, at A / sqrt 3, and at the chip's own shear flow stress (``friction_limit="f
 m = 1) at 100 m/min h 0.10 mm rake 0°, h 0.15 mm, rake -10°, 200 m/min h 0.15 mm rake -7°
 and 300 m/min h 0.15 mm rake +5°; beside each, ``cutting.machining.oxley`` (Lalwani et al.
 2009) at the same speed, thickness and rake.
+
+``--diagnostics`` measures the rake face of issue 60's conditions D (100 m/min, h 0.10 mm,
+rake 0°), C (300 m/min, h 0.15 mm, +5°) and A (200 m/min, h 0.15 mm, -7°), each cut
+Lagrangian and with the ALE chip root (every 20 steps), at the default friction, 0.8 mm of
+travel, over the last 40 % of the steps: what each step saw at the tool comes from the model
+(``cutting.observe`` with the probe ``rake_face``), binned in 5 µm along the rake face from
+the parting line at the edge. Reported: F_c and F_t; F_t split into the rake face's friction
+and its pressure (each node's force along its contact's tangent and normal), the edge's arc,
+the flank and the rest; the contact length (the rake face's normal force, 99 % of it within
+it), the mean normal and shear stress over it, the share of the pressed rake-face node-steps
+whose friction is at Zorev's cap, the rezones that moved no node, and each eroded element
+(its step, travel, plastic strain and temperature before the step, where it was, and the
+distortion that took it out); beside them Oxley's h', sigma_N and tau_int.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import pathlib
 import sys
@@ -755,7 +772,191 @@ def ale_table() -> int:
     return 0
 
 
+# -- the rake face term by term against Extended Oxley (--diagnostics) ----------------------
+
+# Issue 60's conditions: (name, what differs from the default cut, the rake angle in degrees).
+DIAGNOSED = (
+    ("D", {}, 0.0),
+    ("C", {"speed": 300.0, "uncut": 0.15}, 5.0),
+    ("A", {"speed": 200.0, "uncut": 0.15}, -7.0),
+)
+DIAGNOSED_MODELS = (("Lagrangian", {}), ("ALE", {"ale": ALE_EVERY}))
+BIN = 0.005  # mm: the rake-face profile's bins along the face
+BINS = 160  # 0.8 mm of rake face
+CONTACT_SHARE = 0.99  # the contact length holds this share of the rake face's normal force
+LOGGED = 4  # elements an erosion log keeps per step (more going at once are counted)
+# The tool's segments by kind (``tools.Tool(split_faces=True)``'s outline, each side's
+# ring): the arc's, the flank's two, the back and top, the rake face's two.
+ARC = np.arange(cutting.ARC_SEGMENTS)
+FLANK_SEGMENTS = cutting.ARC_SEGMENTS + np.arange(2)
+RAKE_SEGMENTS = cutting.TOOL_NODES - 2 + np.arange(2)
+
+
+def rake_face(model, before, after, seen, rake: float):
+    """One step's rake-face profile, thrust by part and erosions (``cutting.observe``'s probe,
+    ``rake`` in degrees): fixed shapes, so that a run's thousands of steps fit in memory."""
+    cut = model.cut
+    dtype = seen.x.dtype
+    gamma = math.radians(rake)
+    up = jnp.asarray([math.sin(gamma), math.cos(gamma)], dtype)
+    on_tool = -seen.force  # each node's push on the tool (N/mm)
+    normal = seen.contact.normal
+    tangent = jnp.stack([-normal[:, 1], normal[:, 0]], -1)
+    pressure = -jnp.sum(on_tool * normal, -1)  # along the tool's outward normal, into it
+    shear = jnp.abs(jnp.sum(on_tool * tangent, -1))
+    segment = jnp.where(seen.contact.active, seen.contact.segment % cutting.TOOL_NODES, -1)
+    on_rake = jnp.isin(segment, jnp.asarray(RAKE_SEGMENTS))
+    on_arc = jnp.isin(segment, jnp.asarray(ARC))
+    on_flank = jnp.isin(segment, jnp.asarray(FLANK_SEGMENTS))
+    edge = jnp.stack([seen.lowest_x, jnp.asarray(cut.parting_y, dtype)])
+    along = jnp.sum((seen.x - edge[None, :]) * up[None, :], -1)
+    where = jnp.clip(jnp.floor(along / BIN).astype(jnp.int32), 0, BINS - 1)
+
+    def binned(values):
+        return jnp.zeros(BINS, dtype).at[where].add(jnp.where(on_rake, values, 0))
+
+    def thrust(part, values=on_tool[:, 1]):
+        return jnp.sum(jnp.where(part, values, 0))
+
+    # Erosion: the elements this step took out, at their state before it.
+    gone = before.alive & ~after.alive
+    (which,) = jnp.nonzero(gone, size=LOGGED, fill_value=-1)
+    at = jnp.maximum(which, 0)
+    points = before.body.points
+    centre = before.body.x[model.mesh.quads.quads[at]].mean(1)
+    return {
+        "step": before.step,
+        "normal": binned(pressure),
+        "shear": binned(shear),
+        "pressed": binned(jnp.ones_like(pressure)),
+        "capped": binned(seen.at_cap.astype(dtype)),
+        "thrust": jnp.stack(
+            [
+                thrust(on_rake, jnp.sum(on_tool * tangent, -1) * tangent[:, 1]),
+                thrust(on_rake, -pressure * normal[:, 1]),
+                thrust(on_arc),
+                thrust(on_flank),
+                thrust(~(on_rake | on_arc | on_flank)),
+            ]
+        ),
+        "rezoned": seen.rezoned,
+        "eroded": gone.sum(),
+        "element": which,
+        "strain": points.plastic_strain.mean(1)[at],
+        "celsius": points.temperature.mean(1)[at] - 273.15,
+        "distortion": seen.distortion[at],
+        "ahead": seen.lowest_x - centre[:, 0],
+        "above": centre[:, 1] - cut.parting_y,
+    }
+
+
+def diagnose(name: str, changes: dict, rake: float, chunks: int = 20) -> dict:
+    """One cut observed step by step: the rake-face measures over the last 40 % of its
+    steps (``cutting.observe`` with ``rake_face``), the erosion log over the whole run."""
+    cut = cutting.Cutting(**changes)
+    model, state = cutting.setup(cut)
+    total = cut.steps
+    window = total - round(cutting.LAST * total)
+    per = cutting.chunk_steps(cut, math.ceil(total / chunks))
+    dtype = jnp.dtype(cut.dtype)
+    probe = functools.partial(rake_face, rake=rake)
+    sums, steps, forces, rezones, log = {}, 0, [], [], []
+    started = time.perf_counter()
+    for _ in range(0, total, per):
+        state, record, seen = cutting.observe(
+            model, state, jnp.asarray(math.radians(rake), dtype), jnp.asarray(cutting.MU, dtype),
+            per, probe, until=total,
+        )  # fmt: skip
+        seen = jax.device_get(seen)
+        at = np.asarray(seen["step"])
+        real = at < total
+        kept = real & (at >= window)
+        forces.append(np.asarray(record.force)[kept])
+        for key in ("normal", "shear", "pressed", "capped", "thrust"):
+            sums[key] = sums.get(key, 0) + np.asarray(seen[key], np.float64)[kept].sum(0)
+        steps += int(kept.sum())
+        moved = np.asarray(seen["rezoned"])[kept]
+        rezones.extend(moved[np.isfinite(moved)].tolist())
+        for row in np.flatnonzero(real & (np.asarray(seen["eroded"]) > 0)):
+            for k in range(min(LOGGED, int(seen["eroded"][row]))):
+                log.append(
+                    {
+                        "element": int(seen["element"][row, k]),
+                        "step": int(at[row]),
+                        "travel_mm": round(float(cutting.tool_travel(cut, at[row])), 3),
+                        "plastic_strain": round(float(seen["strain"][row, k]), 2),
+                        "temperature_C": round(float(seen["celsius"][row, k])),
+                        "ahead_um": round(1000 * float(seen["ahead"][row, k])),
+                        "above_um": round(1000 * float(seen["above"][row, k])),
+                        "trigger": f"det J ratio {float(seen['distortion'][row, k]):.3g} "
+                        f"< {cut.erode}",
+                    }
+                )
+    mean = {key: value / steps for key, value in sums.items()}
+    cumulative = np.cumsum(mean["normal"])
+    reach = int(np.searchsorted(cumulative, CONTACT_SHARE * cumulative[-1])) + 1
+    length = reach * BIN
+    theory = machining.oxley(speed=cut.speed, uncut=cut.uncut, rake=rake)
+    force = np.concatenate(forces).mean(0)
+    split = mean["thrust"]
+    return {
+        "condition": name,
+        "model": "ALE" if cut.ale is not None else "Lagrangian",
+        "cutting_force": float(force[0]),
+        "thrust_force": float(force[1]),
+        "contact_length": length,
+        "normal_stress": float(mean["normal"][:reach].sum() / length),
+        "shear_stress": float(mean["shear"][:reach].sum() / length),
+        "at_cap": float(sums["capped"].sum() / max(sums["pressed"].sum(), 1)),
+        "thrust_split": [float(v) for v in split],
+        "rezones_idle": (sum(m == 0 for m in rezones), len(rezones)) if cut.ale else None,
+        "eroded": log,
+        "oxley": theory,
+        "seconds": time.perf_counter() - started,
+    }
+
+
+def diagnostics_table(names=None) -> int:
+    """``--diagnostics [D C A]``: each condition's Lagrangian and ALE cut against Oxley."""
+    rows = []
+    print(
+        "| condition | model | F_c | F_t | of F_t: rake friction / rake pressure / edge / "
+        "flank / other | contact length (mm) | σ̄_N (MPa) | τ̄ (MPa) | node-steps at the cap "
+        "| idle rezones | eroded |"
+    )
+    print("|---|---|---:|---:|---|---:|---:|---:|---:|---:|---:|")
+    for name, changes, rake in DIAGNOSED:
+        if names and name not in names:
+            continue
+        for label, extra in DIAGNOSED_MODELS:
+            row = diagnose(name, {**changes, **extra}, rake)
+            rows.append(row)
+            split = " / ".join(f"{v:.1f}" for v in row["thrust_split"])
+            idle = "–" if row["rezones_idle"] is None else "{}/{}".format(*row["rezones_idle"])
+            print(
+                f"| {name} | {label} | {row['cutting_force']:.1f} | {row['thrust_force']:.1f} | "
+                f"{split} | {row['contact_length']:.3f} | {row['normal_stress']:,.0f} | "
+                f"{row['shear_stress']:,.0f} | {row['at_cap']:.2f} | {idle} | "
+                f"{len(row['eroded'])} |",
+                flush=True,
+            )
+            print(f"  ({row['seconds']:.0f} s)", file=sys.stderr, flush=True)
+        theory = rows[-1]["oxley"]
+        print(
+            f"| {name} | Oxley | {theory.cutting_force:.1f} | {theory.thrust_force:.1f} | | "
+            f"h′ {theory.contact_length:.3f} | {theory.interface_normal_stress:,.0f} | "
+            f"{theory.interface_shear_stress:,.0f} | | | |",
+            flush=True,
+        )
+    for row in rows:
+        for entry in row["eroded"]:
+            print(f"erosion, {row['condition']} {row['model']}: {entry}")
+    return 0
+
+
 if __name__ == "__main__":
     if sys.argv[1:] == ["--ale"]:
         sys.exit(ale_table())
+    if sys.argv[1:2] == ["--diagnostics"]:
+        sys.exit(diagnostics_table(sys.argv[2:]))
     sys.exit(_run.suite("simulations", run, draw, __doc__.splitlines()[0]))

@@ -8,11 +8,13 @@ Three choices every explicit contact code makes, each an option here:
   mass allows in the explicit step, so it stays stable whatever the node's
   mass and whatever the mass scaling (``m / dt²`` scales out). Stable for a
   factor below about 1.
-* **The friction law** (``Coulomb`` or ``Zorev``), turned into a
-  coefficient per node and handed to ``jaxcontact.forces.coulomb`` with the
-  slip history (``friction_forces``). ``forces.coulomb`` is the way to
-  compute friction forces; ``friction_forces`` is the simulation parts' use
-  of it, for a law whose coefficient depends on the normal force.
+* **The friction law** (``Coulomb`` or ``Zorev``), turned into a coefficient
+  per node (``Zorev``'s limit is a traction: each node carries it over its
+  tributary length on its own outline, ``tributary``) and handed to
+  ``jaxcontact.forces.coulomb`` with the slip history (``friction_forces``).
+  ``forces.coulomb`` is the way to compute friction forces;
+  ``friction_forces`` is the simulation parts' use of it, for a law whose
+  coefficient depends on the normal force.
 * **The penetration guards** of a body against its own outline
   (``guard``): a contact at an open end of the outline (a crack tip: the
   node's closest point is that end, and which side it lies on is
@@ -33,7 +35,16 @@ from jax import Array
 from jaxcontact import Contact, Slip, Surface
 from jaxcontact.forces import Forces, Friction, coulomb, penalty
 
-__all__ = ["Coulomb", "Guarded", "Zorev", "friction_forces", "guard", "mass_penalty", "own_forces"]
+__all__ = [
+    "Coulomb",
+    "Guarded",
+    "Zorev",
+    "friction_forces",
+    "guard",
+    "mass_penalty",
+    "own_forces",
+    "tributary",
+]
 
 
 def mass_penalty(mass: Array, dt, factor: float) -> Array:
@@ -63,11 +74,34 @@ class Zorev(NamedTuple):
     1973; the form Özel, 2006, *Int. J. Mach. Tools Manuf.* 46, 518-530,
     compares with others).
 
+    The limit is a traction: node ``i`` carries it over its tributary
+    length ``share[i]``, so its friction force is capped at ``limit *
+    share[i]`` (N/mm), and over a contact at the cap the friction forces sum
+    to ``limit`` times the contact's length whatever the node spacing. The
+    share is a length of the slave's outline, not of the master's: the
+    nodes that press are the slave's (``tributary`` measures it, each step,
+    since the outline stretches). One length for every node (a scalar) is a
+    traction only where the nodes are that far apart: on a chip's
+    underside, compressed to about half its elements' length, a share of
+    one element doubles the traction.
+
     Attributes:
       mu: the sliding coefficient.
       limit: the friction stress in sticking (MPa), scalar or f[N].
-      share: each node's share of the contact's length (mm), scalar or f[N]:
-        its force limit is ``limit * share`` (N/mm).
+      share: each node's tributary length on its own outline (mm), f[N]
+        (``tributary``) or a scalar for all: its force limit is
+        ``limit * share`` (N/mm).
+
+    Example:
+      >>> import jax.numpy as jnp
+      >>> import jaxcontact
+      >>> from jaxcontact.sim import coupling
+      >>> line = jaxcontact.Surface(
+      ...     jnp.asarray([[0.0, 0.0], [0.01, 0.0], [0.03, 0.0]]), jnp.asarray([[0, 1], [1, 2]])
+      ... )
+      >>> law = coupling.Zorev(mu=0.3, limit=200.0, share=coupling.tributary(line))
+      >>> [round(length, 6) for length in law.share.tolist()]  # mm
+      [0.005, 0.015, 0.01]
     """
 
     mu: float | Array
@@ -79,6 +113,31 @@ class Zorev(NamedTuple):
         mu = jnp.asarray(self.mu, normal.dtype)
         sticking = normal * mu > cap
         return jnp.where(sticking, cap / jnp.where(normal > 0, normal, 1), mu)
+
+
+def tributary(outline: Surface) -> Array:
+    """f[P]: each node's tributary length on ``outline`` (mm): half the summed lengths of
+    the real segments at it (half the distance to each of its neighbours along the
+    outline), ``0`` for a node on none.
+
+    ``Zorev``'s ``share``: pass the slave body's own outline, as it is now
+    (its nodes are the slaves' rows), so that ``Zorev.limit`` is a
+    traction. An open end's node gets half its one segment. Differentiable
+    in the node positions; a segment of zero length adds zero (and a zero
+    gradient).
+
+    Args:
+      outline: the slave body's outline (``nodes`` f[P, 2], its segments;
+        masked segments add nothing).
+    """
+    nodes, segments = outline.nodes, jnp.maximum(outline.segments, 0)
+    squared = jnp.sum((nodes[segments[:, 1]] - nodes[segments[:, 0]]) ** 2, -1)
+    real = squared > 0
+    if outline.mask is not None:
+        real = real & outline.mask
+    half = jnp.where(real, 0.5 * jnp.sqrt(jnp.where(real, squared, 1)), 0)
+    share = jnp.zeros(nodes.shape[0], nodes.dtype).at[segments[:, 0]].add(half)
+    return share.at[segments[:, 1]].add(half)
 
 
 def friction_forces(

@@ -18,7 +18,12 @@ from jaxcontact._timing import Timing
 from jaxcontact.problems import cutting
 from jaxcontact.problems.ploughing.demo import Summary
 from tests.problems.test_cutting import COARSE
-from tests.support.tolerances import TRACE_END_RTOL, TRACE_MEAN_RTOL
+from tests.support.tolerances import (
+    FLOAT32_SUM_ATOL,
+    FLOAT32_SUM_RTOL,
+    TRACE_END_RTOL,
+    TRACE_MEAN_RTOL,
+)
 
 
 def test_the_trace_is_means_over_equal_runs_of_steps():
@@ -233,3 +238,20 @@ def test_the_recorded_summary_of_the_coarse_cut():
     table = simulations.cutting_table([summary])
     json.dumps(table, allow_nan=False)
     assert [row[0] for row in table["rows"]] == [name for name, _, _ in simulations.QUANTITIES]
+
+
+def test_the_rake_face_diagnosis_adds_up():
+    # The coarse cut, short: the probe's parts of F_t sum to the record's F_t, over one window.
+    found = simulations.diagnose("D", {**COARSE, "travel": 0.15}, 0.0)
+    assert found["model"] == "Lagrangian" and found["rezones_idle"] is None
+    np.testing.assert_allclose(
+        sum(found["thrust_split"]),
+        found["thrust_force"],
+        rtol=FLOAT32_SUM_RTOL,
+        atol=FLOAT32_SUM_ATOL,
+    )
+    assert found["thrust_force"] > 0
+    assert 0 < found["contact_length"] <= simulations.BINS * simulations.BIN
+    assert found["normal_stress"] > 0 and found["shear_stress"] > 0
+    assert 0 <= found["at_cap"] <= 1
+    assert found["oxley"].contact_length > 0

@@ -102,13 +102,16 @@ def test_a_chip_breaker_turns_the_rake_face_towards_the_chip():
         cutting.tool_outline(lowest, 0.0, radius, jnp.float32, breaker=(land, angle, length))
     )
     assert broken.shape == plain.shape == (cutting.TOOL_NODES, 2)
-    np.testing.assert_array_equal(broken[: cutting.ARC_SEGMENTS + 2], plain[:-2])
+    # The same arc, the node on the flank and the flank's end, and the node on
+    # the rake face one arc chord from the edge; the corners in between differ.
+    np.testing.assert_array_equal(broken[: cutting.ARC_SEGMENTS + 3], plain[:-3])
+    np.testing.assert_array_equal(broken[-1], plain[-1])
     # The land runs up the rake face (x of the face, land long), then the wall
     # turns `angle` towards the chip (-x) and runs `length`.
     # Both measured from the sharp tip: the land ends 0.6 - land below the plain face's top.
     face_x = plain[0, 0]
-    wall_end, land_end = broken[-2], broken[-1]
-    np.testing.assert_allclose(land_end, [face_x, plain[-1, 1] - (0.6 - land)], atol=FLOAT32_ATOL)
+    wall_end, land_end = broken[-3], broken[-2]
+    np.testing.assert_allclose(land_end, [face_x, plain[-2, 1] - (0.6 - land)], atol=FLOAT32_ATOL)
     wall = wall_end - land_end
     np.testing.assert_allclose(np.linalg.norm(wall), length, rtol=FLOAT32_RTOL)
     np.testing.assert_allclose(
@@ -119,7 +122,7 @@ def test_a_chip_breaker_turns_the_rake_face_towards_the_chip():
     assert 0.5 * np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y) > 0
     # A longer rake face only moves its top.
     longer = np.asarray(cutting.tool_outline(lowest, 0.0, radius, jnp.float32, rake_face=3.0))
-    np.testing.assert_allclose(longer[-1, 1] - plain[-1, 1], 2.4, rtol=FLOAT32_RTOL)
+    np.testing.assert_allclose(longer[-2, 1] - plain[-2, 1], 2.4, rtol=FLOAT32_RTOL)
 
 
 @pytest.mark.parametrize(

@@ -18,7 +18,12 @@ import pytest
 
 from jaxcontact.problems import cutting
 from jaxcontact.sim import ale
-from tests.support.tolerances import FD_RUN_RTOL, FLOAT32_RTOL, FLOAT32_SUM_RTOL
+from tests.support.tolerances import (
+    FD_RUN_RTOL,
+    FLOAT32_RTOL,
+    FLOAT32_SUM_ATOL,
+    FLOAT32_SUM_RTOL,
+)
 
 COARSE = dict(element=0.05, uncut=0.1, depth=0.1)  # as tests/problems/test_cutting.py's
 
@@ -51,6 +56,25 @@ def test_sticking_limit_is_the_chips_own_shear_flow_stress():
     assert float(limit[corner]) == 0.0
     law = cutting.tool_friction(model, state, 0.3)
     assert law.limit.shape == (model.mesh.quads.nodes.shape[0],)
+
+
+def test_the_cap_is_carried_over_each_nodes_tributary_length():
+    cut = cutting.Cutting(travel=0.05, **COARSE)
+    model, state = cutting.setup(cut)
+    # The uncut layer squeezed to half its length: its top nodes half as far apart.
+    x = state.body.x.at[:, 0].multiply(0.5)
+    share = np.asarray(cutting.contact_share(model, x, state.alive))
+    top = np.asarray(model.mesh.top)
+    np.testing.assert_allclose(share[top[1:-1]], 0.5 * cut.element, rtol=FLOAT32_RTOL)
+    inside = np.setdiff1d(np.arange(x.shape[0]), np.asarray(model.mesh.slaves))
+    assert (share[inside] == 0).all()
+    law = cutting.tool_friction(model, state._replace(body=state.body._replace(x=x)), 0.3)
+    np.testing.assert_array_equal(np.asarray(law.share), share)
+    np.testing.assert_allclose(law.limit, 0.5 * cut.work_material.shear_yield, rtol=FLOAT32_RTOL)
+    # The old call, one element for every node, still works and says what it does.
+    with pytest.warns(DeprecationWarning, match="share="):
+        old = cutting.friction_law(cut, 0.3)
+    assert old.share == cut.element
 
 
 def test_an_ale_cut_rezones_the_chip_root_and_conserves_mass():
@@ -96,3 +120,32 @@ def test_the_gradient_of_the_cutting_force_with_ale_matches_finite_differences()
     step = 1e-5
     central = (float(force(rake + step)[0]) - float(force(rake - step)[0])) / (2 * step)
     np.testing.assert_allclose(float(by_rake), central, rtol=FD_RUN_RTOL)
+
+
+def test_observe_sees_each_step_of_the_run_advance_makes():
+    cut = cutting.Cutting(travel=0.1, ale=ale.Settings(every=20), **COARSE)
+    model, state = cutting.setup(cut)
+
+    def probe(model, before, after, seen):
+        return {"force": -seen.force.sum(0), "moved": seen.rezoned, "step": before.step}
+
+    steps = 200
+    observed, record, probed = cutting.observe(model, state, 0.0, cutting.MU, steps, probe)
+    advanced, plain = cutting.advance(model, state, 0.0, cutting.MU, steps)
+    np.testing.assert_array_equal(np.asarray(record.force), np.asarray(plain.force))
+    np.testing.assert_array_equal(np.asarray(observed.body.x), np.asarray(advanced.body.x))
+    # The tool's force is the sum of what each node feels from it.
+    np.testing.assert_allclose(
+        np.asarray(probed["force"]),
+        np.asarray(record.force),
+        rtol=FLOAT32_SUM_RTOL,
+        atol=FLOAT32_SUM_ATOL,
+    )
+    np.testing.assert_array_equal(np.asarray(probed["step"]), np.arange(steps))
+    # A rezone's move reaches the step after it, and no other.
+    moved = np.asarray(probed["moved"])
+    after_rezone = np.arange(steps) % cut.ale.every == 0
+    assert np.isnan(moved[~after_rezone]).all() and np.isnan(moved[0])
+    assert np.isfinite(moved[after_rezone][1:]).all()
+    with pytest.raises(ValueError, match="probe must be a function"):
+        cutting.observe(model, state, 0.0, cutting.MU, steps, None)

@@ -3,6 +3,7 @@ protocol, and the 0.7.5 names that now forward to them with a warning."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import jax
@@ -11,6 +12,7 @@ import numpy as np
 import pytest
 
 import jaxcontact
+from jaxcontact import forces
 from jaxcontact.problems.cutting import Cutting
 from jaxcontact.sim import coupling, explicit, materials, tools
 from jaxcontact.sim.elements import q4
@@ -90,6 +92,83 @@ def test_zorev_slides_below_the_limit_and_sticks_above_it_with_finite_gradients(
     assert np.isfinite(np.asarray(grad)).all()
     coulomb = coupling.Coulomb(0.3).coefficient(normal)
     np.testing.assert_allclose(np.asarray(coulomb), np.full(4, 0.3), rtol=FLOAT32_RTOL)
+
+
+@pytest.mark.x64
+def test_zorev_at_its_limit_is_a_traction_whatever_the_node_spacing():
+    # A line of slaves 4 to 21 µm apart (mm), pressed into a wide flat master
+    # that then slides far past the stick spring's reach: every node at the cap.
+    xs = jnp.asarray([0.0, 0.004, 0.015, 0.019, 0.04, 0.043, 0.064, 0.07])
+    slaves = jnp.stack([xs, jnp.full_like(xs, -1e-3)], -1)
+    count = xs.shape[0]
+    own = jaxcontact.Surface(slaves, jnp.stack([jnp.arange(count - 1), jnp.arange(1, count)], -1))
+    limit = 200.0  # MPa
+    law = coupling.Zorev(mu=10.0, limit=limit, share=coupling.tributary(own))
+
+    def master(shift):  # a face along y = 0, its outward normal +y
+        return jaxcontact.Surface(
+            jnp.asarray([[1.0 + shift, 0.0], [-1.0 + shift, 0.0]]), jnp.asarray([[0, 1]])
+        )
+
+    search = jaxcontact.Search(radius=0.01, method="exhaustive", track=True)
+    state = search.allocate(slaves, master(0.0))
+    friction = forces.Friction.zeros(count, slaves.dtype)
+    stiffness = 1e5  # N/mm per mm: 100 N/mm of normal force on each node
+    for shift in (0.0, 0.01):
+        contact, state = search.closest(state, slaves, master(shift))
+        assert np.asarray(contact.active).all()
+        pushed, friction = coupling.friction_forces(
+            contact, state.slip, friction, master(shift), stiffness, law
+        )
+    along = np.asarray(pushed.on_slaves)[:, 0]
+    # Each node at its own cap, and the caps sum to the traction times the
+    # contact's length, not to a fixed share times the node count.
+    np.testing.assert_allclose(along, limit * np.asarray(law.share), rtol=FLOAT64_RTOL)
+    np.testing.assert_allclose(along.sum(), limit * float(xs[-1] - xs[0]), rtol=FLOAT64_RTOL)
+
+
+def test_a_nodes_tributary_length_is_half_its_real_segments():
+    # A closed unit square and a padded segment: each corner has two halves of 1.
+    square = jnp.asarray([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0], [5.0, 5.0]])
+    segments = jnp.asarray([[0, 1], [1, 2], [2, 3], [3, 0], [-1, -1], [3, 4]])
+    mask = jnp.asarray([True, True, True, True, False, False])
+    share = coupling.tributary(jaxcontact.Surface(square, segments, mask=mask))
+    np.testing.assert_allclose(np.asarray(share), [1.0, 1.0, 1.0, 1.0, 0.0], rtol=FLOAT32_RTOL)
+    # Two nodes at one place (a segment of zero length): finite gradients.
+    doubled = square.at[1].set(square[0])
+
+    def total(nodes):
+        return coupling.tributary(jaxcontact.Surface(nodes, segments, mask=mask)).sum()
+
+    assert np.isfinite(np.asarray(jax.grad(total)(doubled))).all()
+
+
+@pytest.mark.x64
+@pytest.mark.parametrize("rake_deg", [0.0, 10.0, -7.0])
+def test_pressure_on_a_split_flat_face_pushes_only_across_it(rake_deg):
+    # Frictionless penalty only, smooth normals: slaves pressed, unevenly, into
+    # the rake face past its first (one arc chord long) segment.
+    rake = math.radians(rake_deg)
+    tool = tools.Tool(**TOOL_FIELDS, split_faces=True)
+    up = np.asarray([math.sin(rake), math.cos(rake)])  # along the rake face
+    outward = np.asarray([-math.cos(rake), math.sin(rake)])
+    start = np.asarray(tools.outline(tool, rake, tip=jnp.zeros(2)))[-1]  # the split node
+    along_face = np.linspace(0.005, 0.4, 12)
+    depth = np.linspace(1e-3, 4e-3, 12) ** 2 / 4e-3
+    slaves = jnp.asarray(start + along_face[:, None] * up - depth[:, None] * outward)
+
+    def force_on(tool):
+        surface = tools.surface(tool, rake, tip=jnp.zeros(2))
+        contact = jaxcontact.all_to_all(slaves, surface, radius=0.05, normals=jaxcontact.Smooth())
+        assert np.asarray(contact.active).all()
+        return np.asarray(forces.penalty(contact, surface, 1e3).on_master.sum(0))
+
+    total = force_on(tool)
+    assert abs(total @ up) <= FLOAT64_RTOL * abs(total @ outward)
+    # The face drawn as one segment: the normal, interpolated from the arc's
+    # end node, tilts, and so does the force (about 2°).
+    tilted = force_on(dataclasses.replace(tool, split_faces=False))
+    assert abs(tilted @ up) > 0.01 * abs(tilted @ outward)
 
 
 def test_the_mass_penalty_is_the_mass_over_the_step_squared():

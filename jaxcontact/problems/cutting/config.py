@@ -68,7 +68,9 @@ class Cutting:
       erode: the Jacobian ratio below which an element is eroded.
       shear_factor: Zorev's sticking limit ``m`` (``coupling.Zorev``): the
         friction stress in sticking is ``m k``, ``k`` the shear flow stress
-        that ``friction_limit`` names.
+        that ``friction_limit`` names; a traction, each node carrying it over
+        its tributary length (``model.contact_share``). The default, half of
+        AISI 1045's ``A / sqrt 3``, is 160 MPa.
       friction_limit: which shear flow stress ``k``: ``"flow"``, the chip's
         own, ``sigma_JC(eps_p, rate, T) / sqrt 3`` of the elements at each node
         (Oxley's sticking takes ``m = 1``); ``"initial"``, the material's
@@ -160,7 +162,7 @@ class Cutting:
                         breaker=self.breaker,
                     )
                 )  # fmt: skip
-                flank_end, wall_end, land_end = corners[-3:]
+                flank_end, wall_end, land_end = corners[-4:-1]
                 a, b = wall_end - flank_end, land_end - flank_end
                 if a[0] * b[1] - a[1] * b[0] <= 0:
                     raise ValueError(
@@ -253,8 +255,12 @@ def tool_outline(
 
 def cutting_tool(edge_radius: float, rake_face: float, breaker=None) -> tools.Tool:
     """The cut's ``tools.Tool``: a 7° clearance, a flank of 0.3 mm, the edge drawn by
-    ``ARC_SEGMENTS`` segments."""
-    return tools.Tool(edge_radius, CLEARANCE_DEG, rake_face, FLANK, ARC_SEGMENTS, breaker)
+    ``ARC_SEGMENTS`` segments, each face split one arc chord from the edge
+    (``tools.Tool.split_faces``: the cut's contact normals are smooth, and
+    the pressure on the flat rake face makes no thrust)."""
+    return tools.Tool(
+        edge_radius, CLEARANCE_DEG, rake_face, FLANK, ARC_SEGMENTS, breaker, split_faces=True
+    )
 
 
-TOOL_NODES = ARC_SEGMENTS + 4
+TOOL_NODES = ARC_SEGMENTS + 6

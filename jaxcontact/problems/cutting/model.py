@@ -49,17 +49,19 @@ mesh with its parting line, node separation and the two tool outlines
   with its lowest point on the line (``CHIP_SIDE``, ``BASE_SIDE``: two
   outlines, 2 edge radii apart, told apart by ``Search``'s bodies).
 * **Contact**: two searches a step, because a node at the edge touches the
-  tool and the workpiece at once, and a closest-point search gives each
-  slave one segment. ``Search(track=True, normals=Smooth())`` finds every
-  node's contact with the tool; ``forces.coulomb`` gives the penalty and the
-  friction from the slip history, its reaction on the tool's nodes the
-  cutting force. Friction is Coulomb's ``mu`` times the pressure, capped at
-  ``shear_factor`` times the steel's shear flow stress ``A / sqrt 3`` over a
-  node's share of the face (Zorev, 1963; Shirakashi and Usui, 1973):
-  without the cap, the sticking zone shears the chip's first row of elements
-  into slivers. ``Pairs(self_contact=True)`` over the pool of outline
-  segments finds the chip against the machined surface, the workpiece and
-  itself; ``forces.penalty`` acts on both sides, frictionless. Near the
+  tool and the workpiece at once, and a closest-point search gives each slave
+  one segment. ``Search(track=True, normals=Smooth())`` finds every node's
+  contact with the tool; ``forces.coulomb`` gives the penalty and the friction
+  from the slip history, its reaction on the tool's nodes the cutting force.
+  Friction is Coulomb's ``mu`` times the pressure, capped at ``shear_factor``
+  times the steel's shear flow stress ``A / sqrt 3``, a traction (Zorev, 1963;
+  Shirakashi and Usui, 1973; 160 MPa by default): each node carries it over
+  its tributary length on the workpiece's outline (``coupling.tributary``), so
+  that it is a stress whatever the spacing of the nodes that reach the tool.
+  Without the cap, the sticking zone shears the chip's first row of elements
+  into slivers. ``Pairs(self_contact=True)`` over the pool of outline segments
+  finds the chip against the machined surface, the workpiece and itself;
+  ``forces.penalty`` acts on both sides, frictionless. Near the
   crack tip the outline is open, and a node lies within the radius of the
   other side's segments without being inside: contacts at an open end of
   the outline, and contacts deeper than ``PENMAX`` elements (LS-DYNA's
@@ -111,6 +113,7 @@ import dataclasses
 import functools
 import math
 import time
+import warnings
 from typing import NamedTuple
 
 import jax
@@ -135,14 +138,18 @@ __all__ = [
     "Frame",
     "Model",
     "Record",
+    "Seen",
     "State",
     "Workpiece",
     "advance",
     "chunk_steps",
+    "contact_share",
     "contacts",
     "friction_law",
     "held",
+    "inspect_step",
     "mean_forces",
+    "observe",
     "own_surface",
     "rezone",
     "run",
@@ -449,12 +456,41 @@ def contacts(model: Model, tool_state, own_state, x, lowest_x, rake, released, a
     return tool, on_tool, tool_state, slip, own, on_own, own_state
 
 
-def friction_law(cut: Cutting, mu) -> coupling.Zorev:
+def friction_law(cut: Cutting, mu, share=None) -> coupling.Zorev:
     """The tool's friction with a constant cap: Coulomb's ``mu``, up to Zorev's
     sticking limit of ``shear_factor`` times the material's initial shear flow
-    stress ``A / sqrt 3``, each node's share of the face an element's length
-    (``Cutting(friction_limit="initial")``; ``sticking_limit`` is the other)."""
-    return coupling.Zorev(mu, cut.shear_factor * cut.work_material.shear_yield, cut.element)
+    stress ``A / sqrt 3``, a traction (``Cutting(friction_limit="initial")``;
+    ``sticking_limit`` is the other).
+
+    ``share``: each node's tributary length (mm, f[N]: ``contact_share``).
+    Left out, it is one element for every node, as before 2.3, with a
+    ``DeprecationWarning``: the chip's underside reaches the tool with its
+    nodes about half an element apart, so that cap is about twice the
+    traction it names."""
+    if share is None:
+        warnings.warn(
+            "cutting.friction_law(cut, mu) without share= takes one element as every "
+            "node's share, which makes the cap about twice the traction it names; pass "
+            "share=cutting.contact_share(model, x, alive) (deprecated in 2.3, the "
+            "argument becomes required in 3.0)",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        share = cut.element
+    return coupling.Zorev(mu, cut.shear_factor * cut.work_material.shear_yield, share)
+
+
+def contact_share(model: Model, x: Array, alive: Array) -> Array:
+    """f[N]: each node's tributary length (mm) on the workpiece's outline, the
+    share over which it carries Zorev's limit (``coupling.tributary``).
+
+    Every segment that can be outline counts, released or not (a tied node on
+    the parting line reaches the tool's edge with its two neighbours on the
+    line), none of an eroded element. Nodes inside the workpiece get 0: they
+    do not reach the tool."""
+    mesh = model.mesh
+    outline = jaxcontact.Surface(x, mesh.segments, mask=alive[mesh.owner])
+    return coupling.tributary(outline)
 
 
 def sticking_limit(model: Model, state: State) -> Array:
@@ -483,13 +519,40 @@ def sticking_limit(model: Model, state: State) -> Array:
 def tool_friction(model: Model, state: State, mu) -> coupling.Zorev:
     """The tool's friction law of the cut's ``friction_limit``."""
     cut = model.cut
+    share = contact_share(model, state.body.x, state.alive)
     if cut.friction_limit == "initial":
-        return friction_law(cut, mu)
-    return coupling.Zorev(mu, sticking_limit(model, state), cut.element)
+        return friction_law(cut, mu, share)
+    return coupling.Zorev(mu, sticking_limit(model, state), share)
+
+
+class Seen(NamedTuple):
+    """What one step saw at the tool, node by node (``inspect_step``, ``observe``):
+    the raw material of a rake-face diagnosis (benchmarks/simulations.py's
+    ``--diagnostics``)."""
+
+    x: Array  # f[N, 2]  the nodes where the step found their contacts
+    lowest_x: Array  # f[]  the x of the tool's lowest point
+    contact: jaxcontact.Contact  # each node's contact with the tool (N rows; smooth normals)
+    force: Array  # f[N, 2]  the tool's force on each node, penalty and friction (N/mm)
+    cap: Array  # f[N]  each node's friction force limit: Zorev's limit times its share (N/mm)
+    at_cap: Array  # bool[N]  pressed nodes whose friction force is at ``cap``
+    distortion: Array  # f[E]  each element's smallest det J ratio after the step (erosion's test)
+    rezoned: Array  # f[]  the largest node move of a rezone just before the step (mm; NaN: none)
+
+
+# A friction force within this share of its cap is at the cap (float32 rounding of f_t).
+AT_CAP = 1e-3
 
 
 def step(model: Model, state: State, rake, mu) -> tuple[State, Record]:
     """One explicit step of the cut (``rake`` in radians, ``mu`` the friction coefficient)."""
+    after, record, _ = inspect_step(model, state, rake, mu)
+    return after, record
+
+
+def inspect_step(model: Model, state: State, rake, mu) -> tuple[State, Record, Seen]:
+    """``step``, and what it saw at the tool (``Seen``): the same computation,
+    whose extra outputs cost nothing where they are not used (under ``jit``)."""
     cut, mesh = model.cut, model.mesh
     dtype = jnp.dtype(cut.dtype)
     x = state.body.x
@@ -508,10 +571,9 @@ def step(model: Model, state: State, rake, mu) -> tuple[State, Record]:
         model, state.tool, state.own, x, lowest_x, rake, released, state.alive, kept
     )
     # The tool: penalty, and Zorev's sticking and sliding from the slip
-    # history, each node's share of the face an element.
-    tool_forces, friction = coupling.friction_forces(
-        on_tool, slip, state.friction, tool, k, tool_friction(model, state, mu)
-    )
+    # history, each node's limit over its tributary length.
+    law = tool_friction(model, state, mu)
+    tool_forces, friction = coupling.friction_forces(on_tool, slip, state.friction, tool, k, law)
     # The workpiece against its own outline (the chip on the machined surface
     # and on itself): frictionless penalty on both sides. Near the crack tip
     # the outline is open: a node past its end, or a node of the base under
@@ -541,7 +603,8 @@ def step(model: Model, state: State, rake, mu) -> tuple[State, Record]:
     )
     # Erosion: an element squeezed at a Gauss point to ``erode`` of its area
     # is folding (it would turn inside out next): it is taken out, and counted.
-    alive = state.alive & (q4.distortion(mesh.quads, body.x) > cut.erode)
+    distortion = q4.distortion(mesh.quads, body.x)
+    alive = state.alive & (distortion > cut.erode)
     record = Record(
         force=tool_forces.on_master.sum(0),
         tool_depth=jnp.max(jnp.where(on_tool.active, -on_tool.gap, 0)),
@@ -558,7 +621,23 @@ def step(model: Model, state: State, rake, mu) -> tuple[State, Record]:
     after = State(
         body, tool_state, own_state, friction, released, alive, state.step + 1, state.mass, rate
     )
-    return after, record
+    pressed = jnp.where(on_tool.active, k * -on_tool.gap, 0)
+    cap = jnp.asarray(law.limit, dtype) * jnp.asarray(law.share, dtype) * jnp.ones_like(pressed)
+    tangent = jnp.stack([-on_tool.normal[:, 1], on_tool.normal[:, 0]], -1)
+    sliding = jnp.abs(jnp.sum(tool_forces.on_slaves * tangent, -1))
+    zorev = pressed * jnp.asarray(mu, dtype) > cap
+    at_cap = on_tool.active & zorev & (sliding >= (1 - AT_CAP) * cap)
+    seen = Seen(
+        x,
+        lowest_x,
+        on_tool,
+        tool_forces.on_slaves,
+        cap,
+        at_cap,
+        distortion,
+        jnp.asarray(jnp.nan, dtype),
+    )
+    return after, record, seen
 
 
 def rezone(model: Model, state: State, rake) -> State:
@@ -599,7 +678,9 @@ def rezone(model: Model, state: State, rake) -> State:
     return state._replace(body=body, tool=tool_state, mass=mass)
 
 
-def _scan(model: Model, state: State, rake, mu, steps: int, until=None):
+def _scan(model: Model, state: State, rake, mu, steps: int, until=None, probe=None):
+    """``steps`` steps: ``(state, record)``; with ``probe``, ``(state, (record, probed))``."""
+
     def hold(state, after):
         if until is None:
             return after
@@ -608,19 +689,38 @@ def _scan(model: Model, state: State, rake, mu, steps: int, until=None):
         go = state.step < until
         return jax.tree.map(lambda new, old: jnp.where(go, new, old), after, state)
 
-    def one(state):
-        after, record = step(model, state, rake, mu)
-        return hold(state, after), record
+    if probe is None:
 
+        def one(state):
+            after, record = step(model, state, rake, mu)
+            return hold(state, after), record
+
+        def adapt(state):
+            return hold(state, rezone(model, state, rake))
+
+    else:
+        # The carry holds the last rezone's largest move until the next step reports it.
+        def one(carry):
+            state, moved = carry
+            after, record, seen = inspect_step(model, state, rake, mu)
+            probed = probe(model, state, after, seen._replace(rezoned=moved))
+            return (hold(state, after), jnp.full_like(moved, jnp.nan)), (record, probed)
+
+        def adapt(carry):
+            state, _ = carry
+            after = hold(state, rezone(model, state, rake))
+            return after, jnp.max(jnp.abs(after.body.x - state.body.x))
+
+        nothing = jnp.asarray(jnp.nan, jnp.dtype(model.cut.dtype))
+        state, outputs = _scan_steps(model, one, adapt, (state, nothing), steps)
+        return state[0], outputs
+    return _scan_steps(model, one, adapt, state, steps)
+
+
+def _scan_steps(model: Model, one, adapt, carry, steps: int):
     if model.cut.ale is None:
-        return jax.lax.scan(lambda state, _: one(state), state, None, length=steps)
-    return ale.cycles(
-        one,
-        lambda state: hold(state, rezone(model, state, rake)),
-        state,
-        length=steps,
-        every=model.cut.ale.every,
-    )
+        return jax.lax.scan(lambda carry, _: one(carry), carry, None, length=steps)
+    return ale.cycles(one, adapt, carry, length=steps, every=model.cut.ale.every)
 
 
 def chunk_steps(cut: Cutting, steps: int) -> int:
@@ -629,7 +729,7 @@ def chunk_steps(cut: Cutting, steps: int) -> int:
     return every * math.ceil(steps / every)
 
 
-_advance = jax.jit(_scan, static_argnums=4)
+_advance = jax.jit(_scan, static_argnums=(4, 6))
 _NEVER = np.iinfo(np.int32).max
 
 
@@ -648,6 +748,25 @@ def advance(model: Model, state: State, rake, mu, steps: int, until=None):
         )
     until = jnp.asarray(_NEVER if until is None else until, jnp.int32)
     return _advance(model, state, rake, mu, steps, until)
+
+
+def observe(model: Model, state: State, rake, mu, steps: int, probe, until=None):
+    """``advance`` with a look at every step: ``(state, record, probed)``, the
+    rows of ``probe(model, before, after, seen)`` (a pytree of fixed shapes
+    from the ``State`` before and after the step and its ``Seen``) stacked
+    one per step. ``probe`` is a static argument (a new function recompiles):
+    it reduces what a step saw to what a diagnosis keeps (a profile, a few
+    numbers), so that thousands of steps of it fit in memory."""
+    if steps != chunk_steps(model.cut, steps):
+        raise ValueError(
+            f"observe's steps must be whole ALE cycles of {model.cut.ale.every} steps "
+            f"(cutting.chunk_steps); got {steps}"
+        )
+    if not callable(probe):
+        raise ValueError(f"observe's probe must be a function; got {type(probe).__name__}")
+    until = jnp.asarray(_NEVER if until is None else until, jnp.int32)
+    state, (record, probed) = _advance(model, state, rake, mu, steps, until, probe)
+    return state, record, probed
 
 
 def mean_forces(model: Model, state: State, rake, mu, steps: int | None = None, last: float = 0.4):
