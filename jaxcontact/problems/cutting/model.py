@@ -463,7 +463,7 @@ def friction_law(cut: Cutting, mu, share=None) -> coupling.Zorev:
     ``sticking_limit`` is the other).
 
     ``share``: each node's tributary length (mm, f[N]: ``contact_share``).
-    Left out, it is one element for every node, as before 2.3, with a
+    Left out, it is one element for every node, as before 2.2, with a
     ``DeprecationWarning``: the chip's underside reaches the tool with its
     nodes about half an element apart, so that cap is about twice the
     traction it names."""
@@ -471,7 +471,7 @@ def friction_law(cut: Cutting, mu, share=None) -> coupling.Zorev:
         warnings.warn(
             "cutting.friction_law(cut, mu) without share= takes one element as every "
             "node's share, which makes the cap about twice the traction it names; pass "
-            "share=cutting.contact_share(model, x, alive) (deprecated in 2.3, the "
+            "share=cutting.contact_share(model, x, alive) (deprecated in 2.2, the "
             "argument becomes required in 3.0)",
             DeprecationWarning,
             stacklevel=2,
