@@ -109,7 +109,7 @@ def all_to_all(
     normals = check_normals(normals)
     if normals is not None and np.shape(x)[-1:] == (3,):
         raise ValueError(
-            f"{ONLY_2D}: normals must be None with x of shape {np.shape(x)}; got {normals!r}"
+            f"normals must be None with x of shape {np.shape(x)}; got {normals!r}: {ONLY_2D}"
         )
     checked = _checked(CLOSEST, (x,), surface, radius, mask, pairs)
     points, surface, radius, mask, pairs, num_rows = _padded(*checked)

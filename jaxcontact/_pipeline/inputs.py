@@ -65,7 +65,7 @@ def check_points(name: str, points, dtype=None, dimensions: tuple[int, ...] = (2
     kind = "f" if computed in (np.float32, np.float64) else "other"
     if np.ndim(points) != 2 or np.shape(points)[-1] not in dimensions:
         if np.ndim(points) == 2 and np.shape(points)[-1] == 3:
-            raise ValueError(f"{ONLY_2D}: {name} must have shape (N, 2); got {_describe(points)}")
+            raise ValueError(f"{name} must have shape (N, 2); got {_describe(points)}: {ONLY_2D}")
         wanted = " or ".join(f"(N, {d})" for d in dimensions)
         raise ValueError(f"{name} must have shape {wanted}; got {_describe(points)}")
     if kind != "f":
@@ -152,10 +152,16 @@ def check_surface(surface: Surface, dtype, dimension: int = 2) -> Surface:
     (their coordinates per row); segments become int32."""
     if not isinstance(surface, Surface):
         raise ValueError(f"surface must be a jaxcontact.Surface; got {type(surface).__name__}")
-    if dimension != 2 and np.shape(surface.nodes)[-1:] != (dimension,):
+    if dimension != 2 and np.ndim(surface.nodes) == 2 and np.shape(surface.nodes)[-1] != dimension:
+        # x sets the dimension: the message starts from it.
         raise ValueError(
-            f"surface.nodes must have shape (P, {dimension}), as x has {dimension} coordinates "
-            f"per row; got {_describe(surface.nodes)}"
+            f"x has {dimension} coordinates per row, so surface.nodes must have shape "
+            f"(P, {dimension}) (2 for segments, 3 for triangles); got {_describe(surface.nodes)}"
+        )
+    if dimension == 2 and np.ndim(surface.nodes) == 2 and np.shape(surface.nodes)[-1] == 3:
+        raise ValueError(
+            "surface.nodes must have shape (P, 2), as x has 2 coordinates per row (3D input "
+            f"has x of shape (N, 3) too); got {_describe(surface.nodes)}"
         )
     nodes = check_points("surface.nodes", surface.nodes, dtype, (dimension,))
     segments = check_segments(surface.segments, dimension)
@@ -254,7 +260,7 @@ def require_2d(form: str, **arrays):
     for name, values in arrays.items():
         if np.ndim(values) == 2 and np.shape(values)[-1] == 3:
             raise ValueError(
-                f"{ONLY_2D}: {form}'s {name} must have shape (N, 2); got {_describe(values)}"
+                f"{name} must have shape (N, 2) in {form}; got {_describe(values)}: {ONLY_2D}"
             )
 
 

@@ -154,8 +154,8 @@ def check(pairs, x, surface: Surface, mask) -> Pairs:
         ] + (["self_contact"] if pairs.self_contact is not False else [])
         if given_fields:
             raise ValueError(
-                f"{ONLY_2D}: pairs must be None (or Pairs()) with x of shape "
-                f"{tuple(x.shape)}; got Pairs with {', '.join(given_fields)}"
+                f"pairs must be None (or Pairs()) with x of shape {tuple(x.shape)}; got Pairs "
+                f"with {', '.join(given_fields)}: {ONLY_2D}"
             )
     if not isinstance(pairs.self_contact, bool):
         raise ValueError(f"Pairs.self_contact must be a bool; got {pairs.self_contact!r}")

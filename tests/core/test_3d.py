@@ -454,28 +454,34 @@ def test_gradients_are_finite_on_degenerate_inputs():
 def test_the_forms_without_3d_refuse_it_by_name():
     xs, surface, mask = padded(random_slaves(0), *star_mesh(0))
     message = "3D input is supported by all_to_all in this release"
-    with pytest.raises(ValueError, match=message + r".*x.*\(48, 3\)"):
+    with pytest.raises(
+        ValueError, match=r"^x must have shape \(N, 2\) in bucket_sort; got shape \(48, 3\)"
+    ):
         jaxcontact.bucket_sort(xs, surface, radius=0.5, mask=mask)
-    with pytest.raises(ValueError, match=message + ".*x_prev"):
+    with pytest.raises(ValueError, match="^x_prev must have shape .* in swept; .*" + message):
         jaxcontact.swept(xs, xs, surface, mask=mask)
-    with pytest.raises(ValueError, match=message):
+    with pytest.raises(ValueError, match="^x_prev .* in bucket_swept; .*" + message):
         jaxcontact.bucket_swept(xs, xs, surface, mask=mask)
-    with pytest.raises(ValueError, match=message):
+    with pytest.raises(ValueError, match="^x must have shape .*" + message):
         Search(radius=0.5).allocate(xs, surface, mask=mask)
     flat = jnp.zeros((4, 2))
     flat_surface = Surface(flat, jnp.asarray([[0, 1]]))
     state = Search(radius=0.5).allocate(flat, flat_surface)
-    with pytest.raises(ValueError, match=message + r".*x"):
+    with pytest.raises(
+        ValueError, match=r"^x must have shape \(N, 2\); got shape \(48, 3\).*" + message
+    ):
         Search(radius=0.5).closest(state, xs, surface, mask=mask)
-    with pytest.raises(ValueError, match=message + ".*pairs"):
+    with pytest.raises(ValueError, match="^pairs must be None.*slave_body.*" + message):
         jaxcontact.all_to_all(xs, surface, radius=0.5, mask=mask, pairs=Pairs(slave_body=mask * 1))
-    with pytest.raises(ValueError, match=message + ".*normals"):
+    with pytest.raises(ValueError, match="^normals must be None.*" + message):
         jaxcontact.all_to_all(xs, surface, radius=0.5, mask=mask, normals=Smooth())
 
 
 def test_mismatched_dimensions_name_the_argument():
     x = jnp.zeros((3, 3))
-    with pytest.raises(ValueError, match=r"surface.nodes must have shape \(P, 3\).*\(4, 2\)"):
+    with pytest.raises(
+        ValueError, match=r"^x has 3 .* surface.nodes must have shape \(P, 3\).*\(4, 2\)"
+    ):
         jaxcontact.all_to_all(x, Surface(jnp.zeros((4, 2)), jnp.asarray([[0, 1]])), radius=1.0)
     with pytest.raises(ValueError, match=r"surface.segments must have shape \(M, 3\).*\(1, 2\)"):
         jaxcontact.all_to_all(x, Surface(jnp.zeros((4, 3)), jnp.asarray([[0, 1]])), radius=1.0)
