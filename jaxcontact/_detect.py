@@ -74,8 +74,16 @@ def all_to_all(
 ) -> Contact:
     """Closest master segment of every slave, by dense N x M projection.
 
+    In 3D, the closest triangle: ``x`` f[N, 3] against a surface of nodes
+    f[P, 3] and triangles i32[M, 3] (counter-clockwise seen from outside);
+    ``xi`` is then f[N, 2] (the barycentric weights of the face's corners
+    1 and 2), ``point`` and ``normal`` f[N, 3], ``vertex`` i32[N, 2] (the
+    closest feature's nodes), and the gap on an edge or at a vertex is
+    signed by its angle-weighted pseudo-normal (docs/contract.md, "Contact
+    in 3D"). ``pairs`` and ``normals`` must then be None.
+
     Args:
-      x: f[N, 2] slave coordinates (float32 or float64).
+      x: f[N, 2] (or f[N, 3]) slave coordinates (float32 or float64).
       surface: the master ``Surface``; its nodes share ``x``'s dtype.
       radius: search radius, >= 0: a scalar, or f[N] one per slave; a slave
         is ``found`` when its closest real segment lies within its radius.
@@ -96,7 +104,8 @@ def all_to_all(
     Raises:
       ValueError: on a wrong shape or dtype, and (outside ``jit``) on a real
         segment's index out of range (masked segments' indices may be
-        anything) or a negative or non-finite radius.
+        anything) or a negative or non-finite radius; in 3D, on ``pairs``
+        or ``normals`` given.
 
     Example:
       >>> import jax.numpy as jnp
