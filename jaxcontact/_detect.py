@@ -19,7 +19,7 @@ import numpy as np
 from jaxcontact._normals import Smooth, check_normals, smoothed_jit
 from jaxcontact._pipeline import driver
 from jaxcontact._pipeline import pairs as _pairs
-from jaxcontact._pipeline.inputs import reach_of, require_concrete
+from jaxcontact._pipeline.inputs import ONLY_2D, reach_of, require_2d, require_concrete
 from jaxcontact._pipeline.padding import cut_entries, cut_rows, pad_scene
 from jaxcontact._pipeline.pairs import Pairs
 from jaxcontact._pipeline.sizes import check_sizes
@@ -74,8 +74,16 @@ def all_to_all(
 ) -> Contact:
     """Closest master segment of every slave, by dense N x M projection.
 
+    In 3D, the closest triangle: ``x`` f[N, 3] against a surface of nodes
+    f[P, 3] and triangles i32[M, 3] (counter-clockwise seen from outside);
+    ``xi`` is then f[N, 2] (the barycentric weights of the face's corners
+    1 and 2), ``point`` and ``normal`` f[N, 3], ``vertex`` i32[N, 2] (the
+    closest feature's nodes), and the gap on an edge or at a vertex is
+    signed by its angle-weighted pseudo-normal (docs/contract.md, "Contact
+    in 3D"). ``pairs`` and ``normals`` must then be None.
+
     Args:
-      x: f[N, 2] slave coordinates (float32 or float64).
+      x: f[N, 2] (or f[N, 3]) slave coordinates (float32 or float64).
       surface: the master ``Surface``; its nodes share ``x``'s dtype.
       radius: search radius, >= 0: a scalar, or f[N] one per slave; a slave
         is ``found`` when its closest real segment lies within its radius.
@@ -96,7 +104,8 @@ def all_to_all(
     Raises:
       ValueError: on a wrong shape or dtype, and (outside ``jit``) on a real
         segment's index out of range (masked segments' indices may be
-        anything) or a negative or non-finite radius.
+        anything) or a negative or non-finite radius; in 3D, on ``pairs``
+        or ``normals`` given.
 
     Example:
       >>> import jax.numpy as jnp
@@ -107,6 +116,10 @@ def all_to_all(
       ([0.25, -0.125], [False, True], [[0.0, 1.0], [0.0, 1.0]])
     """
     normals = check_normals(normals)
+    if normals is not None and np.shape(x)[-1:] == (3,):
+        raise ValueError(
+            f"normals must be None with x of shape {np.shape(x)}; got {normals!r}: {ONLY_2D}"
+        )
     checked = _checked(CLOSEST, (x,), surface, radius, mask, pairs)
     points, surface, radius, mask, pairs, num_rows = _padded(*checked)
     contact = driver.exhaustive(CLOSEST, points, surface, radius, mask, pairs)
@@ -146,6 +159,7 @@ def swept(
       >>> crossing.crossed.tolist(), crossing.t.tolist(), crossing.point.tolist()
       ([True], [0.25], [[1.0, 1.0]])
     """
+    require_2d("swept", x_prev=x_prev, x=x)
     checked = _checked(SWEPT, (x_prev, x), surface, None, mask, pairs)
     points, surface, _, mask, pairs, num_rows = _padded(*checked)
     crossing = driver.exhaustive(SWEPT, points, surface, None, mask, pairs)
@@ -194,6 +208,7 @@ def bucket_sort(
       >>> bool((contact.segment == all_to_all(scene.x, scene.surface, radius=0.1).segment).all())
       True
     """
+    require_2d("bucket_sort", x=x)
     require_concrete("bucket_sort", (x, surface, radius, mask, pairs))
     checked = _checked(CLOSEST, (x,), surface, radius, mask, pairs)
     (x,), surface, radius, mask, pairs, num_rows = _padded(*checked)
@@ -232,6 +247,7 @@ def bucket_swept(
       A ``Crossing`` equal to ``swept``'s, ``overflow`` False, or its
       ``CrossingList``.
     """
+    require_2d("bucket_swept", x_prev=x_prev, x=x)
     require_concrete("bucket_swept", (x_prev, x, surface, mask, pairs))
     checked = _checked(SWEPT, (x_prev, x), surface, None, mask, pairs)
     (x_prev, x), surface, _, mask, pairs, num_rows = _padded(*checked)
@@ -249,6 +265,7 @@ def at_sizes(
     its inputs checked as the one-call forms check them, nothing padded:
     what a ``Search`` step runs, for the tests and the benchmarks. Runs
     under ``jit`` and ``vmap`` (``sizes`` is static)."""
+    require_2d("a bucket sort at sizes", x=points[-1])
     points, surface, radius, mask = query.check(points, surface, radius, mask)
     pairs = _pairs.check(pairs, points[-1], surface, mask)
     check_sizes(sizes, points[-1].shape[0], for_paths=query.num_points > 1)

@@ -33,10 +33,15 @@ class Surface(NamedTuple):
     ``Pairs(self_contact=True)``, with its own body's outside its
     neighbourhood along the outline): several
     deformable bodies are searched in one call.
+
+    In 3D (``all_to_all`` alone in this release) ``nodes`` is f[P, 3] and
+    ``segments`` holds triangles, i32[M, 3], each counter-clockwise seen from
+    outside so that its normal ``(b - a) x (c - a)`` points out
+    (docs/contract.md, "Contact in 3D").
     """
 
-    nodes: Array  # f[P, 2]  master node coordinates
-    segments: Array  # i32[M, 2]  start and end node index of each segment
+    nodes: Array  # f[P, 2]  master node coordinates (3D: f[P, 3])
+    segments: Array  # i32[M, 2]  start and end node index of each segment (3D: i32[M, 3] triangles)
     mask: Array | None = None  # bool[M]  True for real segments; None means all real
     body: Array | None = None  # i32[M]  body label of each segment; None: no labels
 
@@ -51,6 +56,12 @@ class Contact(NamedTuple):
     the closest point is an end of the segment (decided by exact sign tests,
     never from ``xi``, which may round to 1 inside the face), ``-1`` on the
     face's interior.
+
+    In 3D (slaves f[N, 3], triangles) ``xi`` is f[N, 2], the barycentric
+    weights of the face's corners 1 and 2; ``point`` and ``normal`` are
+    f[N, 3]; ``vertex`` is i32[N, 2], the closest feature's nodes:
+    ``(-1, -1)`` on the face's interior, ``(v, -1)`` at a vertex, an edge's
+    two nodes in increasing order (docs/contract.md, "Contact in 3D").
     """
 
     gap: Array  # f[N]  signed gap; negative is penetration

@@ -9,6 +9,9 @@ The self-contact builders (``corner_outline``, ``folded_u``, ``curling_chip``,
 ``two_blocks``) return a ``BodiesScene`` instead: deformable outlines whose
 every node is a slave, labelled by body, with the nodes that penetrate
 another part of the outline and their analytic depths.
+
+In 3D (``all_to_all`` alone in this release), ``split_quads`` turns quads
+into triangles and ``box_surface`` builds a closed triangulated box.
 """
 
 from __future__ import annotations
@@ -25,6 +28,7 @@ from jaxcontact._types import Array, Surface
 __all__ = [
     "BodiesScene",
     "Scene",
+    "box_surface",
     "corner_outline",
     "curling_chip",
     "cutting_scene",
@@ -34,6 +38,7 @@ __all__ = [
     "paper_scene",
     "paper_tool",
     "rough_die_scene",
+    "split_quads",
     "two_blocks",
 ]
 
@@ -493,6 +498,78 @@ def two_blocks(n: int = 10, *, overlap: float = 0.05, dtype=jnp.float32) -> Bodi
     segments = np.concatenate([_loop(4 * n), _loop(4 * n, 4 * n)])
     radius = max(2 * overlap, 1 / n)
     return _bodies_scene(nodes, segments, node_body, radius, np.maximum(inside, 0.0), dtype)
+
+
+def split_quads(quads) -> np.ndarray:
+    """i32[2Q, 3]: each quad ``(a, b, c, d)`` of ``quads`` (i[Q, 4]) as the
+    triangles ``(a, b, c)`` and ``(a, c, d)``, in the quads' order.
+
+    Both triangles keep the quad's orientation: a quad counter-clockwise
+    seen from outside (normal out, as a 3D ``Surface`` wants its triangles)
+    gives two such triangles. The diagonal is always ``a-c``: for a quad
+    that is not flat, list it from the corner whose diagonal you want.
+
+    Raises:
+      ValueError: when ``quads`` is not of shape (Q, 4) with integer entries.
+
+    Example:
+      >>> split_quads([[0, 1, 2, 3]]).tolist()
+      [[0, 1, 2], [0, 2, 3]]
+    """
+    quads = np.asarray(quads)
+    if quads.ndim != 2 or quads.shape[-1] != 4 or quads.dtype.kind not in "iu":
+        raise ValueError(
+            f"quads must have shape (Q, 4) and an integer dtype; got shape {quads.shape} "
+            f"and dtype {quads.dtype}"
+        )
+    first, second = quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]
+    return np.stack([first, second], axis=1).reshape(-1, 3).astype(np.int32)
+
+
+def box_surface(low, high, subdivisions: int = 1, *, dtype=jnp.float32) -> Surface:
+    """A closed 3D ``Surface``: the box ``[low, high]`` (3 floats each), each
+    side cut into ``subdivisions`` x ``subdivisions`` quads, split into
+    triangles (``split_quads``) counter-clockwise seen from outside.
+
+    Nodes are shared between sides: ``6 s^2 + 2`` nodes (s = ``subdivisions``)
+    and ``12 s^2`` triangles, the sides in the order -x, +x, -y, +y, -z, +z.
+
+    Example:
+      >>> box = box_surface((0, 0, 0), (1, 1, 1))
+      >>> box.nodes.shape, box.segments.shape
+      ((8, 3), (12, 3))
+    """
+    low, high = np.asarray(low, np.float64), np.asarray(high, np.float64)
+    steps = np.arange(subdivisions + 1) / subdivisions
+    index: dict[tuple, int] = {}
+    nodes, quads = [], []
+
+    def node(point) -> int:
+        key = tuple(np.round(point, 12))
+        if key not in index:
+            index[key] = len(nodes)
+            nodes.append(point)
+        return index[key]
+
+    for axis in range(3):
+        # (u, v) spans the side with u x v along the outward normal.
+        for outward in (-1, 1):
+            u, v = (axis + 1) % 3, (axis + 2) % 3
+            if outward < 0:
+                u, v = v, u
+            ids = np.empty((subdivisions + 1, subdivisions + 1), int)
+            for i, s in enumerate(steps):
+                for j, t in enumerate(steps):
+                    point = low.copy()
+                    point[u] = low[u] + s * (high[u] - low[u])
+                    point[v] = low[v] + t * (high[v] - low[v])
+                    point[axis] = high[axis] if outward > 0 else low[axis]
+                    ids[i, j] = node(point)
+            for i in range(subdivisions):
+                for j in range(subdivisions):
+                    quads.append([ids[i, j], ids[i + 1, j], ids[i + 1, j + 1], ids[i, j + 1]])
+    triangles = split_quads(np.asarray(quads))
+    return Surface(jnp.asarray(np.asarray(nodes), dtype), jnp.asarray(triangles))
 
 
 # dir() lists the public names (numpy, jnp and the helpers stay out of it).

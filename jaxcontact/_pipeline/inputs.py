@@ -47,16 +47,27 @@ def _describe(value) -> str:
     return f"shape {tuple(np.shape(value))} and dtype {jnp.result_type(value)}"
 
 
-def check_points(name: str, points, dtype=None) -> Array:
-    """Checks ``points`` is f[N, 2] (of ``dtype`` if given) and returns it as an array."""
+# The forms that take 2D input alone say so to a 3D array: which form does take it.
+ONLY_2D = (
+    "3D input is supported by all_to_all in this release; the bucket sort, Search, swept, "
+    "the pair rules and smooth normals take 2D input (f[N, 2]) for now"
+)
+
+
+def check_points(name: str, points, dtype=None, dimensions: tuple[int, ...] = (2,)) -> Array:
+    """Checks ``points`` is f[N, d] for a ``d`` in ``dimensions`` (of ``dtype``
+    if given) and returns it as an array."""
     if not hasattr(points, "dtype"):
         points = jnp.asarray(points)
     # float16 and bfloat16 are refused too: the error bounds the tests state
     # (and the exact ties at vertices) are for float32 and float64.
     computed = jax.dtypes.canonicalize_dtype(points.dtype)
     kind = "f" if computed in (np.float32, np.float64) else "other"
-    if np.ndim(points) != 2 or np.shape(points)[-1] != 2:
-        raise ValueError(f"{name} must have shape (N, 2); got {_describe(points)}")
+    if np.ndim(points) != 2 or np.shape(points)[-1] not in dimensions:
+        if np.ndim(points) == 2 and np.shape(points)[-1] == 3:
+            raise ValueError(f"{name} must have shape (N, 2); got {_describe(points)}: {ONLY_2D}")
+        wanted = " or ".join(f"(N, {d})" for d in dimensions)
+        raise ValueError(f"{name} must have shape {wanted}; got {_describe(points)}")
     if kind != "f":
         raise ValueError(
             f"{name} must be a real floating array (float32 or float64); got {_describe(points)}"
@@ -83,12 +94,16 @@ def check_mask(name: str, mask, length: int) -> Array | None:
     return as_array(mask)
 
 
-def check_segments(segments):
-    """Checks ``surface.segments`` is i[M, 2] (shape and dtype only); returns it."""
+def check_segments(segments, dimension: int = 2):
+    """Checks ``surface.segments`` is i[M, 2] (segments; i[M, 3] triangles
+    for a ``dimension`` of 3), shape and dtype only; returns it."""
     if not hasattr(segments, "dtype"):
         segments = np.asarray(segments)
-    if np.ndim(segments) != 2 or np.shape(segments)[-1] != 2:
-        raise ValueError(f"surface.segments must have shape (M, 2); got {_describe(segments)}")
+    if np.ndim(segments) != 2 or np.shape(segments)[-1] != dimension:
+        what = " (triangles, as the nodes are 3D)" if dimension == 3 else ""
+        raise ValueError(
+            f"surface.segments must have shape (M, {dimension}){what}; got {_describe(segments)}"
+        )
     if np.dtype(segments.dtype).kind not in "iu":
         raise ValueError(f"surface.segments must be an integer array; got {_describe(segments)}")
     return segments
@@ -132,12 +147,24 @@ def _as_int32(segments, num_nodes: int):
     return as_array(xp.where(in_range, segments.astype(np.int32), -1), np.int32)
 
 
-def check_surface(surface: Surface, dtype) -> Surface:
-    """Checks a ``Surface`` against the slaves' ``dtype``; segments become int32."""
+def check_surface(surface: Surface, dtype, dimension: int = 2) -> Surface:
+    """Checks a ``Surface`` against the slaves' ``dtype`` and ``dimension``
+    (their coordinates per row); segments become int32."""
     if not isinstance(surface, Surface):
         raise ValueError(f"surface must be a jaxcontact.Surface; got {type(surface).__name__}")
-    nodes = check_points("surface.nodes", surface.nodes, dtype)
-    segments = check_segments(surface.segments)
+    if dimension != 2 and np.ndim(surface.nodes) == 2 and np.shape(surface.nodes)[-1] != dimension:
+        # x sets the dimension: the message starts from it.
+        raise ValueError(
+            f"x has {dimension} coordinates per row, so surface.nodes must have shape "
+            f"(P, {dimension}) (2 for segments, 3 for triangles); got {_describe(surface.nodes)}"
+        )
+    if dimension == 2 and np.ndim(surface.nodes) == 2 and np.shape(surface.nodes)[-1] == 3:
+        raise ValueError(
+            "surface.nodes must have shape (P, 2), as x has 2 coordinates per row (3D input "
+            f"has x of shape (N, 3) too); got {_describe(surface.nodes)}"
+        )
+    nodes = check_points("surface.nodes", surface.nodes, dtype, (dimension,))
+    segments = check_segments(surface.segments, dimension)
     mask = check_mask("surface.mask", surface.mask, segments.shape[0])
     _check_real_indices(segments, mask, nodes.shape[0])
     body = check_labels("surface.body", surface.body, segments.shape[0], "M")
@@ -199,13 +226,14 @@ def check_labels(name: str, labels, length: int, symbol: str = "N"):
     return as_array(xp.where(fits, labels, -1).astype(np.int32))
 
 
-def check_contact_inputs(x, surface: Surface, radius, mask):
+def check_contact_inputs(x, surface: Surface, radius, mask, dimensions: tuple[int, ...] = (2,)):
     """Checks the arguments of a closest-point detector; returns them as arrays.
 
-    ``radius`` may be a scalar or f[N], one per slave."""
-    x = check_points("x", x)
+    ``radius`` may be a scalar or f[N], one per slave; ``x`` has as many
+    coordinates per row as one of ``dimensions`` (3D: ``all_to_all`` alone)."""
+    x = check_points("x", x, dimensions=dimensions)
     mask = check_mask("mask", mask, x.shape[0])
-    surface = check_surface(surface, x.dtype)
+    surface = check_surface(surface, x.dtype, x.shape[-1])
     return x, surface, check_radius(radius, x.dtype, x.shape[0], mask), mask
 
 
@@ -224,6 +252,16 @@ def check_slaves(x, x_prev, mask):
         return check_path_inputs(x_prev, x, mask)
     x = check_points("x", x)
     return None, x, check_mask("mask", mask, x.shape[0])
+
+
+def require_2d(form: str, **arrays):
+    """A ``ValueError`` naming ``form`` and the argument when one of ``arrays``
+    (f[N, d]) has 3 coordinates per row: ``form`` takes 2D input alone."""
+    for name, values in arrays.items():
+        if np.ndim(values) == 2 and np.shape(values)[-1] == 3:
+            raise ValueError(
+                f"{name} must have shape (N, 2) in {form}; got {_describe(values)}: {ONLY_2D}"
+            )
 
 
 def require_concrete(name: str, values, hint: str | None = None):

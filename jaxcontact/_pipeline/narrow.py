@@ -23,6 +23,7 @@ from jaxcontact._pipeline.pairs import pick
 from jaxcontact._pipeline.segments import Segments
 from jaxcontact._pipeline.sort import stable_order
 from jaxcontact._pipeline.tiles import tile
+from jaxcontact._pipeline.triangles import face
 from jaxcontact._types import Array, Sizes
 
 # Up to this many pairs, ``search_all`` scores the whole plane at once (``_lowest_in_plane``).
@@ -44,9 +45,9 @@ def search_all(pair_value, segments: Segments, num_rows: int, dtype) -> tuple[Ar
     segment, and its score (``all_to_all``, ``swept``, and the bucket sort's
     kept slaves when there are few segments)."""
 
-    # Each segment's own share of the kernel, for all at once (``Edge``),
-    # with what the pair rule reads of it (``pairs``).
-    edges = (edge(segments.start, segments.end), segments.tags)
+    # Each segment's own share of the kernel, for all at once (``Edge``;
+    # ``Face`` in 3D), with what the pair rule reads of it (``pairs``).
+    edges = (_shares(segments), segments.tags)
 
     def score(k):
         value = pair_value(jax.tree.map(lambda field: field[k], edges))
@@ -59,6 +60,13 @@ def search_all(pair_value, segments: Segments, num_rows: int, dtype) -> tuple[Ar
     # Rows are not masked here but where the result is assembled: any per-row
     # mask fused into this loop made it 3-4x slower (measured).
     return lowest_score(score, num_segments, num_rows, dtype)
+
+
+def _shares(segments: Segments):
+    """Each segment's ``Edge``, or each triangle's ``Face`` (3D)."""
+    if segments.apex is None:
+        return edge(segments.start, segments.end)
+    return face(segments.start, segments.end, segments.apex)
 
 
 def _lowest_in_plane(pair_value, edges, segment_ok: Array, dtype):

@@ -20,7 +20,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxcontact._pairs import SELF_CONTACT_REACH, Pairs, Rule
-from jaxcontact._pipeline.inputs import check_labels, is_concrete
+from jaxcontact._pipeline.inputs import ONLY_2D, check_labels, is_concrete
 from jaxcontact._pipeline.outline import arc_distance, chains
 from jaxcontact._pipeline.segments import Segments
 from jaxcontact._types import Array, Surface
@@ -142,6 +142,21 @@ def check(pairs, x, surface: Surface, mask) -> Pairs:
     """``pairs`` (a ``Pairs``, or None for every pair) checked against the
     slaves ``x`` (f[N, 2]), the master ``surface`` and the slave ``mask``."""
     pairs = given(pairs)
+    if x.shape[-1] == 3:
+        given_fields = [
+            name
+            for name, value in (
+                ("slave_node", pairs.slave_node),
+                ("slave_body", pairs.slave_body),
+                ("allow", pairs.allow),
+            )
+            if value is not None
+        ] + (["self_contact"] if pairs.self_contact is not False else [])
+        if given_fields:
+            raise ValueError(
+                f"pairs must be None (or Pairs()) with x of shape {tuple(x.shape)}; got Pairs "
+                f"with {', '.join(given_fields)}: {ONLY_2D}"
+            )
     if not isinstance(pairs.self_contact, bool):
         raise ValueError(f"Pairs.self_contact must be a bool; got {pairs.self_contact!r}")
     if pairs.self_contact and pairs.slave_node is None:

@@ -1,4 +1,4 @@
-"""The closest-point query: each slave's nearest real segment within its radius.
+"""The closest-point query: each slave's nearest real segment (3D: triangle) within its radius.
 
 The search decides, without gradients, which segment each slave belongs to
 (the lowest squared distance, exact ties to the lower index); then the pair
@@ -6,6 +6,12 @@ is evaluated once more (``project``) for that one segment, with the vertex
 tie rule (``prefer_outside``). Values and gradients therefore come from the
 same code whatever the search was, and a binned search that picks the same
 segment as the exhaustive one returns bit-identical rows.
+
+In 3D (slaves f[N, 3], triangles i32[M, 3]) the pair kernel is
+``triangles.squared_distance`` and the assembly ``contact_on_faces``: exact
+ties stay with the lower face index, and the gap's sign off a face's
+interior comes from the feature's pseudo-normal, so no tie rule of its own
+is needed for the sign.
 """
 
 from __future__ import annotations
@@ -13,9 +19,16 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
-from jaxcontact._pipeline import inputs
+from jaxcontact._pipeline import inputs, triangles
 from jaxcontact._pipeline.broad import Box
-from jaxcontact._pipeline.geometry import cross_sign, dot, project, squared_distance, unit_normal
+from jaxcontact._pipeline.geometry import (
+    cross_sign,
+    dot,
+    project,
+    safe_sqrt,
+    squared_distance,
+    unit_normal,
+)
 from jaxcontact._pipeline.outline import vertex_neighbours
 from jaxcontact._pipeline.pairs import allows, pick
 from jaxcontact._pipeline.segments import Segments, sanitize_points
@@ -152,6 +165,86 @@ def contact_from_choice(
     )
 
 
+def contact_on_faces(
+    x: Array, segments: Segments, choice: Array, radius: Array, overflow: Array, row_ok: Array
+) -> Contact:
+    """The 3D ``Contact`` of slaves ``x`` (f[N, 3], bad rows zeroed) on their chosen triangles.
+
+    ``choice`` (i32[N], -1 for none) keeps exact ties with the lower face
+    index. The gap is ``(x - p) . n`` on the face's interior and ``+-|x - p|``
+    on an edge or at a vertex, signed by that feature's pseudo-normal
+    (``triangles.pseudo_normals``; zero counted positive); the two agree
+    where they meet. ``xi`` holds the barycentric weights of the face's
+    corners 1 and 2, ``normal`` the face's outward unit normal, ``vertex``
+    (i32[N, 2]) the feature's nodes: ``(-1, -1)`` on the interior, ``(v, -1)``
+    at a vertex, the edge's two nodes in increasing order on an edge.
+    """
+    choice = jax.lax.stop_gradient(choice)
+    num_rows = x.shape[0]
+    if segments.ok.shape[0] == 0:
+        return Contact(
+            gap=jnp.zeros(num_rows, x.dtype),
+            xi=jnp.zeros((num_rows, 2), x.dtype),
+            segment=jnp.full(num_rows, -1, jnp.int32),
+            point=jnp.zeros_like(x),
+            normal=jnp.zeros_like(x),
+            vertex=jnp.full((num_rows, 2), -1, jnp.int32),
+            found=jnp.zeros(num_rows, bool),
+            active=jnp.zeros(num_rows, bool),
+            overflow=overflow,
+        )
+    index = jnp.maximum(choice, 0)
+    chosen = triangles.face(segments.start[index], segments.end[index], segments.apex[index])
+    closest = jax.vmap(triangles.closest_point)(x, chosen)
+    normal = triangles.unit_normals(segments)[index]
+    pseudo = triangles.pseudo_normals(segments)
+    region = jax.lax.stop_gradient(closest.region)
+    corners = segments.indices[index]
+    # The feature's corners: a vertex region's corner, an edge region's two.
+    first = jnp.select(
+        [region == triangles.AT_B, region == triangles.ON_BC, region == triangles.AT_C],
+        [1, 1, 2],
+        jnp.where(region == triangles.ON_CA, 2, 0),
+    )
+    on_edge = region >= triangles.ON_AB
+    at_vertex = (region > triangles.INTERIOR) & ~on_edge
+    node = jnp.take_along_axis(corners, first[:, None], axis=1)[:, 0]
+    following = jnp.take_along_axis(corners, ((first + 1) % 3)[:, None], axis=1)[:, 0]
+    edge_of = jnp.where(region == triangles.ON_AB, 0, jnp.where(region == triangles.ON_BC, 1, 2))
+    edge_normal = jnp.take_along_axis(pseudo.edge[index], edge_of[:, None, None], axis=1)[:, 0]
+    feature_normal = jnp.where(at_vertex[:, None], pseudo.vertex[node], edge_normal)
+    offset = closest.offset
+    distance = safe_sqrt(jnp.sum(offset * offset, axis=-1))
+    outside = jnp.sum(jax.lax.stop_gradient(offset) * feature_normal, axis=-1) >= 0
+    corner_gap = jnp.where(outside, distance, -distance)
+    gap = jnp.where(region == triangles.INTERIOR, jnp.sum(offset * normal, axis=-1), corner_gap)
+    vertex = jnp.stack(
+        [
+            jnp.where(on_edge, jnp.minimum(node, following), jnp.where(at_vertex, node, -1)),
+            jnp.where(on_edge, jnp.maximum(node, following), -1),
+        ],
+        axis=-1,
+    )
+    has_choice = row_ok & (choice >= 0)
+    found = has_choice & (jnp.abs(gap) <= radius)
+
+    def keep(value):
+        return jnp.where(found.reshape(found.shape + (1,) * (value.ndim - 1)), value, 0)
+
+    gap = keep(gap)
+    return Contact(
+        gap=gap,
+        xi=keep(closest.weights),
+        segment=jnp.where(found, choice, -1).astype(jnp.int32),
+        point=keep(closest.point),
+        normal=keep(normal),
+        vertex=jnp.where(found[:, None], vertex, -1).astype(jnp.int32),
+        found=found,
+        active=found & (gap < 0),
+        overflow=overflow,
+    )
+
+
 def rounding_reach(segments: Segments, radius):
     """f[]: ``radius`` plus a bound on how far the search's score (its squared
     distance) and the reported gap may differ by rounding.
@@ -180,14 +273,17 @@ class Closest(Query):
     uses_radius = True
 
     def check(self, points, surface, radius, mask):
+        # The query takes 3D input; the forms that do not yet refuse it themselves.
         (x,) = points
-        x, surface, radius, mask = inputs.check_contact_inputs(x, surface, radius, mask)
+        x, surface, radius, mask = inputs.check_contact_inputs(x, surface, radius, mask, (2, 3))
         return (x,), surface, radius, mask
 
     def sizing(self, points, reach):
         return {"radius": reach}
 
     def kernel(self, x, edge):
+        if x.shape[-1] == 3:
+            return triangles.squared_distance(x, edge)
         return squared_distance(x, edge)
 
     def sanitize(self, points, mask):
@@ -212,6 +308,8 @@ class Closest(Query):
         return culled
 
     def assemble(self, kept, segments, choice, radius, overflow, ok, ruling):
+        if segments.apex is not None:
+            return contact_on_faces(kept[0], segments, choice, radius, overflow, ok)
         rule, tags = ruling
         return contact_from_choice(kept[0], segments, choice, radius, overflow, ok, rule, tags)
 

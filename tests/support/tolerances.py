@@ -25,6 +25,17 @@ GRADIENT_EPS = 4500
 # differently per fusion, a few ulps of the coordinates' scale.
 BINNED_ULPS = 16
 
+# The 3D oracle (tests/support/oracle3d.py) against all_to_all in float64: a
+# face whose distance is within this of the nearest's is a near tie, either
+# right (the two codes round distances a few ulps, 1e-15, apart).
+NEAR_TIE_3D = 1e-9
+# A float32 3D scene: slaves within this of the radius may be found or not
+# (float32 distances of size ~1 round by about 1e-7).
+FLOAT32_RADIUS_EDGE = 1e-5
+# The signed distance is 1-Lipschitz: gaps a step h apart differ by at most
+# h, to float64 rounding of values of size ~1.
+LIPSCHITZ_SLACK = 1e-9
+
 # --- Values computed two ways, by the precision they are computed in ---------
 
 # O(1) values exact but for a few float64 roundings (strains, unit gradients).
