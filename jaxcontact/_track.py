@@ -145,7 +145,9 @@ def track(last, contact: Contact | ContactList, surface: Surface) -> Slip:
             "last must be a Contact or a History (N rows); got a ContactList, whose N is "
             "not known: pass last.to_contact(N)"
         )
+    _inputs.check_2d_result("contact", contact)
     if not isinstance(last, History):
+        _inputs.check_2d_result("last", last)
         last = history_of(last, last.found.shape[0])
     num_slaves = last.found.shape[0]
     if isinstance(contact, Contact) and contact.found.shape != last.found.shape:

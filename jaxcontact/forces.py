@@ -68,6 +68,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from jaxcontact._pipeline import inputs as _inputs
 from jaxcontact._pipeline.placement import replicated
 from jaxcontact._removed import listing as _listing
 from jaxcontact._removed import missing as _missing
@@ -136,6 +137,7 @@ def _entries(contact, num_slaves: int | None) -> tuple[_Entries, int]:
         row = jnp.arange(num_slaves, dtype=jnp.int32)
     else:
         raise ValueError(f"contact must be a Contact or ContactList; got {type(contact).__name__}")
+    _inputs.check_2d_result("contact", contact)
     active = contact.active & (contact.segment >= 0)
     entries = _Entries(
         row,

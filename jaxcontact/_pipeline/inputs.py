@@ -50,8 +50,20 @@ def _describe(value) -> str:
 # The forms that take 2D input alone say so to a 3D array: which form does take it.
 ONLY_2D = (
     "3D input is supported by all_to_all in this release; the bucket sort, Search, swept, "
-    "the pair rules and smooth normals take 2D input (f[N, 2]) for now"
+    "the pair rules, smooth normals, the forces and the slip history take 2D input "
+    "(f[N, 2]) for now"
 )
+
+
+def check_2d_result(name: str, contact) -> None:
+    """A ``ValueError`` for a 3D result (``normal`` f[..., 3]) passed where only a 2D one
+    is served (the forces, the slip history): a 3D face has three nodes to spread a
+    reaction on and a tangent plane to slip in, which these do not yet read."""
+    normal = getattr(contact, "normal", None)
+    if normal is not None and np.shape(normal)[-1:] == (3,):
+        raise ValueError(
+            f"{name} is a 3D result (normal of shape {tuple(np.shape(normal))}): {ONLY_2D}"
+        )
 
 
 def check_points(name: str, points, dtype=None, dimensions: tuple[int, ...] = (2,)) -> Array:

@@ -475,6 +475,23 @@ def test_the_forms_without_3d_refuse_it_by_name():
         jaxcontact.all_to_all(xs, surface, radius=0.5, mask=mask, pairs=Pairs(slave_body=mask * 1))
     with pytest.raises(ValueError, match="^normals must be None.*" + message):
         jaxcontact.all_to_all(xs, surface, radius=0.5, mask=mask, normals=Smooth())
+    # A 3D result is refused by the forces and the slip history, which spread onto two
+    # nodes and slip along a line (a silent wrong answer otherwise).
+    contact = jaxcontact.all_to_all(xs, surface, radius=0.5, mask=mask)
+    with pytest.raises(ValueError, match=r"^contact is a 3D result .*" + message):
+        jaxcontact.forces.penalty(contact, surface, 1.0)
+    with pytest.raises(ValueError, match=r"^contact is a 3D result .*" + message):
+        jaxcontact.forces.coulomb(
+            contact,
+            jaxcontact.Slip(jnp.zeros(48), jnp.zeros(48, bool), jnp.zeros((48, 2))),
+            jaxcontact.forces.Friction.zeros(48),
+            surface,
+            stiffness=1.0,
+            tangent_stiffness=1.0,
+            mu=0.3,
+        )
+    with pytest.raises(ValueError, match=r"^contact is a 3D result .*" + message):
+        jaxcontact.track(contact, contact, surface)
 
 
 def test_mismatched_dimensions_name_the_argument():
