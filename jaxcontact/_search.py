@@ -851,8 +851,9 @@ def _losses(last_active, contact, x, surface: Surface, mask):
     """``(active, lost)``: i32[N] the segment each slave is active on now (-1 where
     none), and i32[] how many slaves active at the last step (on ``last_active``) are
     found nowhere now while lying behind that segment, within its span: deeper than the
-    radius reaches (``SearchState.lost``). One gather and one sum over the N rows; a
-    step that overflowed counts none (its missing contacts are the overflow's)."""
+    radius reaches (``SearchState.lost``). Elementwise over the N rows, with gathers only
+    where a slave active at the last step is found nowhere now; a step that overflowed
+    counts none (its missing contacts are the overflow's)."""
     num_rows = x.shape[0]
     if isinstance(contact, ContactList):
         rows = jnp.where(contact.found, contact.node, num_rows)
